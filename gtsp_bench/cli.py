@@ -1,0 +1,216 @@
+"""The ``gtsp-bench`` command line.
+
+Bad input (a file, an option, a solution) prints one line ``gtsp-bench: error: <file>: <problem>``
+on stderr and exits with code 2; a misbehaving solver exits with code 1. Importing this module
+does not import torch: solvers are loaded only when used.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from gtsp_bench import __version__
+from gtsp_bench.errors import InputError, SolverError
+
+DEFAULT_OMEGA = 0.5
+DEFAULT_TIME_LIMIT = 60.0
+
+_EPILOG = """\
+examples:
+  gtsp-bench generate --clusters 7 --seed 1 -o k7.json
+  gtsp-bench solve k7.json --solver greedy --omega 0.3
+  gtsp-bench solve k7.json --solver brute --json > sol.json
+  gtsp-bench evaluate k7.json --solution sol.json --omega 0.3
+  gtsp-bench solve ../shared/gtsplib/11berlin52.gtsp --solver greedy
+  gtsp-bench solvers
+"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with the project's one-line error format."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def _int(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+
+
+def _key_value(text: str) -> tuple[str, Any]:
+    key, sep, raw = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError:
+        value = raw
+    return key, value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``gtsp-bench``."""
+    parser = _Parser(
+        prog="gtsp-bench",
+        description=(
+            "Benchmark suite and solvers for UAV data collection from IoT clusters as a "
+            "generalized TSP (Zhu et al.): pick one cluster head per cluster and a closed tour "
+            "from the base station, minimising omega * ground energy + (1 - omega) * UAV energy."
+        ),
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    p = sub.add_parser("generate", help="write a seeded random UAV instance (paper section VI)",
+                       description="Write a seeded random UAV instance as JSON: K clusters of N "
+                       "nodes in non-overlapping squares of half-width zeta in the area; the base "
+                       "station at (area/2, 0).")
+    p.add_argument("--clusters", "-k", type=_int, required=True, metavar="K", help="number of clusters")
+    p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N",
+                   help="nodes per cluster (default: 20)")
+    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--zeta", type=_float, default=50.0, metavar="Z",
+                   help="cluster half-width in m (default: 50)")
+    p.add_argument("--area", type=_float, default=1000.0, metavar="A",
+                   help="side of the square area in m (default: 1000)")
+    p.add_argument("--name", help="instance name (default: uav-K{K}-N{N}-s{seed})")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.json", help="file to write")
+    p.set_defaults(handler=_cmd_generate)
+
+    p = sub.add_parser("solve", help="solve an instance with a registered solver",
+                       description="Solve a .json (UAV) or .gtsp (GTSPLIB) instance. The result "
+                       "is re-checked and re-priced by the shared evaluator.")
+    p.add_argument("file", metavar="FILE", help="instance file (.json or .gtsp)")
+    p.add_argument("--solver", "-s", required=True, help="solver name (see 'gtsp-bench solvers')")
+    p.add_argument("--omega", "-w", type=_float, default=DEFAULT_OMEGA, metavar="W",
+                   help=f"weight of the ground energy in [0, 1] (default: {DEFAULT_OMEGA}; "
+                   "ignored for .gtsp)")
+    p.add_argument("--time-limit", "-t", type=_float, default=DEFAULT_TIME_LIMIT, metavar="S",
+                   help=f"time limit in seconds (default: {DEFAULT_TIME_LIMIT:g})")
+    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--param", "-p", type=_key_value, action="append", default=[],
+                   metavar="KEY=VALUE", help="solver option, repeatable (e.g. -p ants=50)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
+    p.add_argument("-o", "--output", metavar="SOL.json", help="also write the result JSON here")
+    p.set_defaults(handler=_cmd_solve)
+
+    p = sub.add_parser("evaluate", help="re-price a solution file",
+                       description="Check and price a solution (a JSON object with 'order' and "
+                       "'heads', as 'solve --json' prints) on an instance.")
+    p.add_argument("file", metavar="FILE", help="instance file (.json or .gtsp)")
+    p.add_argument("--solution", required=True, metavar="SOL.json", help="solution file")
+    p.add_argument("--omega", "-w", type=_float, default=DEFAULT_OMEGA, metavar="W",
+                   help=f"weight of the ground energy in [0, 1] (default: {DEFAULT_OMEGA})")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
+    p.set_defaults(handler=_cmd_evaluate)
+
+    p = sub.add_parser("solvers", help="list the registered solvers",
+                       description="List the registered solvers, one line each.")
+    p.set_defaults(handler=_cmd_solvers)
+    return parser
+
+
+# ---------------------------------------------------------------------- commands
+def _cmd_generate(args: argparse.Namespace) -> int:
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.io import write_instance
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".json":
+        raise InputError(f"{out}: generated instances are written as .json")
+    inst = generate_instance(args.clusters, args.nodes, args.seed, zeta=args.zeta,
+                             area=args.area, depot=(args.area / 2, 0.0), name=args.name)
+    write_instance(inst, out)
+    print(f"wrote {out} ({inst.n_clusters} clusters, {inst.n_nodes} nodes)", file=sys.stderr)
+    return 0
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from gtsp_bench.io import atomic_write_text, read_instance
+    from gtsp_bench.registry import get_solver, run_solver
+
+    instance = read_instance(args.file)
+    options = dict(args.param)
+    solver = get_solver(args.solver, **options)
+    result = run_solver(solver, instance, args.omega, time_limit=args.time_limit,
+                        seed=args.seed, name=args.solver)
+    text = json.dumps(result.to_dict())
+    if args.output:
+        atomic_write_text(args.output, text + "\n")
+    print(text if args.json else result.summary())
+    return 0
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from gtsp_bench.energy import check_omega, evaluate
+    from gtsp_bench.errors import InfeasibleSolutionError
+    from gtsp_bench.io import read_instance, read_solution
+    from gtsp_bench.registry import Result
+
+    instance = read_instance(args.file)
+    order, heads = read_solution(args.solution)
+    omega = check_omega(args.omega) if instance.is_uav else None
+    start = time.perf_counter()
+    try:
+        ev = evaluate(instance, omega, order, heads)
+    except InfeasibleSolutionError as e:
+        raise InputError(f"{args.solution}: infeasible solution: {e}") from None
+    result = Result(
+        instance=instance.name, solver=None, omega=omega,
+        order=tuple(order), heads=tuple(heads), objective=ev.objective, energy=ev.energy,
+        distance=ev.distance, status="feasible", lower_bound=None,
+        runtime_s=time.perf_counter() - start,
+    )
+    print(json.dumps(result.to_dict()) if args.json else result.summary())
+    return 0
+
+
+def _cmd_solvers(args: argparse.Namespace) -> int:
+    from gtsp_bench.registry import solver_specs
+
+    specs = solver_specs()
+    width = max(len(s.name) for s in specs)
+    for spec in specs:
+        print(f"{spec.name:<{width}}  {spec.description}")
+    return 0
+
+
+# ---------------------------------------------------------------------- entry point
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI; returns the exit code (0 ok, 1 solver failure, 2 bad input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.handler(args) or 0)
+    except InputError as e:
+        print(f"gtsp-bench: error: {e}", file=sys.stderr)
+        return 2
+    except SolverError as e:
+        print(f"gtsp-bench: solver error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("gtsp-bench: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,101 @@
+"""Reading and writing files. Parsing lives in :mod:`gtsp_bench.parse`; this module opens files,
+prefixes errors with the file name, and writes atomically (a temporary file, then a rename)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+from gtsp_bench.parse import (
+    format_gtsp,
+    format_json_instance,
+    parse_gtsp,
+    parse_json_instance,
+    parse_solution,
+)
+
+#: Instance file suffixes this package reads.
+INSTANCE_SUFFIXES = (".json", ".gtsp")
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, not a file") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file") from None
+    except OSError as e:
+        raise InputError(f"{path}: cannot read ({e.strerror})") from None
+
+
+def read_instance(path: str | os.PathLike[str]) -> Instance:
+    """Read an instance from a ``.json`` (UAV) or ``.gtsp`` (GTSPLIB) file.
+
+    Raises
+    ------
+    InputError
+        ``"<path>: <problem>"`` for a missing, unreadable or malformed file.
+    """
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in INSTANCE_SUFFIXES:
+        raise InputError(f"{p}: unknown instance format (expected {' or '.join(INSTANCE_SUFFIXES)})")
+    text = _read_text(p)
+    try:
+        if suffix == ".gtsp":
+            return parse_gtsp(text)
+        return parse_json_instance(text, default_name=p.stem)
+    except InputError as e:
+        raise InputError(f"{p}: {e}") from None
+
+
+def read_solution(path: str | os.PathLike[str]) -> tuple[list[int], list[int]]:
+    """Read ``(order, heads)`` from a solution JSON file (the shape ``solve --json`` prints)."""
+    p = Path(path)
+    try:
+        return parse_solution(_read_text(p))
+    except InputError as e:
+        if str(e).startswith(f"{p}:"):
+            raise
+        raise InputError(f"{p}: {e}") from None
+
+
+def write_instance(instance: Instance, path: str | os.PathLike[str]) -> Path:
+    """Write an instance atomically, as JSON or GTSPLIB by the file suffix."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in INSTANCE_SUFFIXES:
+        raise InputError(f"{p}: unknown instance format (expected {' or '.join(INSTANCE_SUFFIXES)})")
+    text = format_gtsp(instance) if suffix == ".gtsp" else format_json_instance(instance)
+    atomic_write_text(p, text)
+    return p
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` so that readers see the old file or the whole new one."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    p = Path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+    except OSError as e:
+        raise InputError(f"{p}: cannot write ({e.strerror})") from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

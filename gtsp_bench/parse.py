@@ -1,0 +1,345 @@
+"""Parsing and formatting of instance and solution text, kept apart from file I/O.
+
+Two instance formats:
+
+* JSON (UAV instances)::
+
+    {"name": "...", "depot": [x, y] or null, "clusters": [[[x, y], ...], ...],
+     "params": {"<energy parameter>": value, ...},   # optional overrides
+     "meta": {...}}                                  # optional, free
+
+* GTSPLIB ``.gtsp``: TSPLIB95 plus ``TYPE : GTSP``, ``GTSP_SETS : M`` and a ``GTSP_SET_SECTION``
+  of ``set_id node node ... -1`` records. Coordinate types EUC_2D, CEIL_2D, ATT, GEO, and EXPLICIT
+  with ``EDGE_WEIGHT_FORMAT : FULL_MATRIX``.
+
+Every function raises :class:`~gtsp_bench.errors.InputError` with a message that names the
+problem; the I/O layer prefixes the file name.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+from gtsp_bench.params import EnergyParams
+
+_JSON_KEYS = {"name", "depot", "clusters", "params", "meta"}
+
+
+# ---------------------------------------------------------------------- JSON instances
+def _strict_json(text: str) -> Any:
+    def reject(token: str) -> None:
+        raise InputError(f"invalid JSON: {token} is not a number")
+
+    try:
+        return json.loads(text, parse_constant=reject)
+    except json.JSONDecodeError as e:
+        raise InputError(f"invalid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+
+
+def _point(value: Any, where: str) -> list[float]:
+    if (
+        not isinstance(value, list)
+        or len(value) != 2
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    ):
+        raise InputError(f"{where} must be a pair of numbers [x, y], got {value!r}")
+    if not all(math.isfinite(v) for v in value):
+        raise InputError(f"{where} has a NaN or infinite coordinate")
+    return [float(v) for v in value]
+
+
+def instance_from_dict(data: Any, default_name: str = "instance") -> Instance:
+    """Build a UAV instance from the decoded JSON object.
+
+    Parameters
+    ----------
+    data
+        The decoded JSON value.
+    default_name
+        Name used when the object has none.
+    """
+    if not isinstance(data, dict):
+        raise InputError("an instance must be a JSON object")
+    unknown = sorted(set(data) - _JSON_KEYS)
+    if unknown:
+        raise InputError(f"unknown key {unknown[0]!r} (valid: {', '.join(sorted(_JSON_KEYS))})")
+    if "clusters" not in data:
+        raise InputError("missing key 'clusters'")
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name:
+        raise InputError("'name' must be a non-empty string")
+    clusters_raw = data["clusters"]
+    if not isinstance(clusters_raw, list) or not clusters_raw:
+        raise InputError("'clusters' must be a non-empty list of clusters")
+    clusters = []
+    for k, cluster in enumerate(clusters_raw):
+        if not isinstance(cluster, list):
+            raise InputError(f"clusters[{k}] must be a list of [x, y] points")
+        if not cluster:
+            raise InputError(f"clusters[{k}] is empty")
+        clusters.append(np.array([_point(p, f"clusters[{k}][{i}]") for i, p in enumerate(cluster)]))
+    depot_raw = data.get("depot")
+    depot = None if depot_raw is None else np.array(_point(depot_raw, "depot"))
+    params_raw = data.get("params") or {}
+    if not isinstance(params_raw, dict):
+        raise InputError("'params' must be an object of energy parameter overrides")
+    params = EnergyParams.from_mapping(params_raw)
+    meta = data.get("meta") or {}
+    if not isinstance(meta, dict):
+        raise InputError("'meta' must be an object")
+    return Instance(name=name, clusters=tuple(clusters), depot=depot, params=params, meta=meta)
+
+
+def parse_json_instance(text: str, default_name: str = "instance") -> Instance:
+    """Parse the JSON text of a UAV instance."""
+    return instance_from_dict(_strict_json(text), default_name)
+
+
+def instance_to_dict(instance: Instance) -> dict[str, Any]:
+    """The JSON object of a UAV instance (energy parameters: only the overrides)."""
+    if instance.params is None:
+        raise InputError(f"{instance.name} is a distance-only instance; write it as .gtsp")
+    out: dict[str, Any] = {
+        "name": instance.name,
+        "depot": None if instance.depot is None else instance.depot.tolist(),
+        "clusters": [c.tolist() for c in instance.clusters],
+    }
+    if overrides := instance.params.overrides():
+        out["params"] = overrides
+    if instance.meta:
+        out["meta"] = dict(instance.meta)
+    return out
+
+
+def format_json_instance(instance: Instance) -> str:
+    """JSON text of a UAV instance (one cluster per line, readable and compact)."""
+    d = instance_to_dict(instance)
+    lines = ["{", f'  "name": {json.dumps(d["name"])},', f'  "depot": {json.dumps(d["depot"])},']
+    lines.append('  "clusters": [')
+    lines.append(",\n".join(f"    {json.dumps(c)}" for c in d["clusters"]))
+    tail = [f'  "{key}": {json.dumps(d[key], sort_keys=True)}' for key in ("params", "meta") if key in d]
+    lines.append("  ]" + ("," if tail else ""))
+    lines.append(",\n".join(tail))
+    lines.append("}")
+    return "\n".join(line for line in lines if line) + "\n"
+
+
+# ---------------------------------------------------------------------- solutions
+def parse_solution(text: str) -> tuple[list[int], list[int]]:
+    """Read ``order`` and ``heads`` from a solution JSON object (other keys are ignored)."""
+    data = _strict_json(text)
+    if not isinstance(data, dict):
+        raise InputError("a solution must be a JSON object with 'order' and 'heads'")
+    out = []
+    for key in ("order", "heads"):
+        if key not in data:
+            raise InputError(f"missing key {key!r}")
+        value = data[key]
+        if not isinstance(value, list) or not all(
+            isinstance(v, int) and not isinstance(v, bool) for v in value
+        ):
+            raise InputError(f"{key!r} must be a list of integers")
+        out.append(value)
+    return out[0], out[1]
+
+
+# ---------------------------------------------------------------------- GTSPLIB
+_SECTIONS = {"NODE_COORD_SECTION", "GTSP_SET_SECTION", "EDGE_WEIGHT_SECTION",
+             "DISPLAY_DATA_SECTION", "EOF"}
+_COORD_TYPES = {"EUC_2D", "CEIL_2D", "ATT", "GEO"}
+
+
+def _split_key(line: str) -> tuple[str, str]:
+    if ":" in line:
+        key, value = line.split(":", 1)
+        return key.strip().upper(), value.strip()
+    return line.strip().upper(), ""
+
+
+def parse_gtsp(text: str) -> Instance:
+    """Parse a GTSPLIB ``.gtsp`` text into a distance-only :class:`Instance`.
+
+    Clusters keep the file's set order; the nodes of a set keep the order in which the set lists
+    them. ``meta`` records the name, comment and original node ids.
+    """
+    header: dict[str, str] = {}
+    sections: dict[str, list[str]] = {}
+    current: str | None = None
+    for raw in text.splitlines():
+        line = raw.strip()
+        if not line:
+            continue
+        key, value = _split_key(line)
+        if key in _SECTIONS:
+            if key == "EOF":
+                break
+            current = key
+            sections[current] = [value] if value else []
+        elif current is None:
+            header[key] = value
+        else:
+            sections[current].append(line)
+
+    if header.get("TYPE", "").upper() not in {"GTSP", "AGTSP"} and "GTSP_SETS" not in header:
+        raise InputError("not a GTSP file (TYPE is not GTSP and there is no GTSP_SETS)")
+    if header.get("TYPE", "").upper() == "AGTSP":
+        raise InputError("asymmetric GTSP (AGTSP) is not supported")
+    ewt = header.get("EDGE_WEIGHT_TYPE", "").upper()
+    if ewt not in _COORD_TYPES | {"EXPLICIT"}:
+        raise InputError(
+            f"unsupported EDGE_WEIGHT_TYPE {ewt or '(missing)'!r} "
+            f"(supported: {', '.join(sorted(_COORD_TYPES | {'EXPLICIT'}))})"
+        )
+    dim = _header_int(header, "DIMENSION")
+    n_sets = _header_int(header, "GTSP_SETS")
+    coord_lines = sections.get("NODE_COORD_SECTION") or sections.get("DISPLAY_DATA_SECTION")
+    coords = _parse_coords(coord_lines, dim, ewt)
+    sets = _parse_sets(sections.get("GTSP_SET_SECTION"), dim, n_sets)
+    weights = None
+    if ewt == "EXPLICIT":
+        weights = _parse_full_matrix(header, sections.get("EDGE_WEIGHT_SECTION"), dim)
+    order = np.concatenate(sets)  # original (0-based) node ids in cluster order
+    if coords is None:
+        coords = np.full((dim, 2), np.nan)
+    clusters = tuple(coords[s] for s in sets)
+    name = header.get("NAME", "gtsp")
+    meta = {"format": "gtsplib", "node_ids": (order + 1).tolist()}
+    if header.get("COMMENT"):
+        meta["comment"] = header["COMMENT"]
+    return Instance(
+        name=name,
+        clusters=clusters,
+        depot=None,
+        params=None,
+        edge_weight_type=ewt,
+        weights=None if weights is None else weights[np.ix_(order, order)],
+        meta=meta,
+    )
+
+
+def _header_int(header: Mapping[str, str], key: str) -> int:
+    if key not in header:
+        raise InputError(f"missing {key}")
+    try:
+        value = int(header[key])
+    except ValueError:
+        raise InputError(f"{key} must be an integer, got {header[key]!r}") from None
+    if value < 1:
+        raise InputError(f"{key} must be >= 1, got {value}")
+    return value
+
+
+def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | None:
+    if lines is None:
+        if ewt == "EXPLICIT":
+            return None
+        raise InputError("missing NODE_COORD_SECTION")
+    coords = np.full((dim, 2), np.nan)
+    seen = np.zeros(dim, dtype=bool)
+    for line in lines:
+        parts = line.split()
+        try:
+            node, x, y = int(parts[0]), float(parts[1]), float(parts[2])
+        except (ValueError, IndexError):
+            raise InputError(f"bad coordinate line {line!r}") from None
+        if not 1 <= node <= dim:
+            raise InputError(f"node {node} is outside 1..{dim} (DIMENSION)")
+        if seen[node - 1]:
+            raise InputError(f"node {node} has two coordinate lines")
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise InputError(f"node {node} has a NaN or infinite coordinate")
+        coords[node - 1] = (x, y)
+        seen[node - 1] = True
+    if not seen.all():
+        raise InputError(f"node {int(np.flatnonzero(~seen)[0]) + 1} has no coordinates")
+    return coords
+
+
+def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarray]:
+    if lines is None:
+        raise InputError("missing GTSP_SET_SECTION")
+    tokens: list[int] = []
+    for line in lines:
+        try:
+            tokens.extend(int(t) for t in line.split())
+        except ValueError:
+            raise InputError(f"bad set line {line!r}") from None
+    sets: dict[int, list[int]] = {}
+    owner = np.zeros(dim, dtype=np.int64)
+    i = 0
+    while i < len(tokens):
+        set_id = tokens[i]
+        if set_id in sets:
+            raise InputError(f"set {set_id} is listed twice")
+        members = []
+        i += 1
+        while i < len(tokens) and tokens[i] != -1:
+            node = tokens[i]
+            if not 1 <= node <= dim:
+                raise InputError(f"set {set_id} names node {node}, outside 1..{dim}")
+            if owner[node - 1]:
+                raise InputError(f"node {node} is in set {owner[node - 1]} and in set {set_id}")
+            owner[node - 1] = set_id
+            members.append(node - 1)
+            i += 1
+        if i == len(tokens):
+            raise InputError(f"set {set_id} is not terminated by -1")
+        i += 1
+        if not members:
+            raise InputError(f"set {set_id} is empty")
+        sets[set_id] = members
+    if len(sets) != n_sets:
+        raise InputError(f"GTSP_SETS says {n_sets} sets but GTSP_SET_SECTION has {len(sets)}")
+    if not owner.all():
+        raise InputError(f"node {int(np.flatnonzero(owner == 0)[0]) + 1} is in no set")
+    return [np.array(sets[s]) for s in sorted(sets)]
+
+
+def _parse_full_matrix(header: Mapping[str, str], lines: list[str] | None, dim: int) -> np.ndarray:
+    fmt = header.get("EDGE_WEIGHT_FORMAT", "").upper()
+    if fmt != "FULL_MATRIX":
+        raise InputError(f"EXPLICIT weights: only FULL_MATRIX is supported, got {fmt or '(missing)'!r}")
+    if lines is None:
+        raise InputError("missing EDGE_WEIGHT_SECTION")
+    try:
+        values = np.array([float(t) for line in lines for t in line.split()])
+    except ValueError:
+        raise InputError("EDGE_WEIGHT_SECTION has a value that is not a number") from None
+    if values.size != dim * dim:
+        raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, FULL_MATRIX needs {dim * dim}")
+    w = values.reshape(dim, dim)
+    if not np.allclose(w, w.T):
+        raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
+    return w
+
+
+def format_gtsp(instance: Instance) -> str:
+    """GTSPLIB text of a distance-only instance; nodes are numbered 1..n in cluster order."""
+    if instance.params is not None:
+        raise InputError(f"{instance.name} is a UAV instance; write it as .json")
+    ewt = instance.edge_weight_type
+    lines = [f"NAME : {instance.name}", "TYPE : GTSP"]
+    if instance.meta.get("comment"):
+        lines.append(f"COMMENT : {instance.meta['comment']}")
+    lines += [f"DIMENSION : {instance.n_nodes}", f"GTSP_SETS : {instance.n_clusters}",
+              f"EDGE_WEIGHT_TYPE : {ewt}"]
+    if ewt == "EXPLICIT":
+        lines += ["EDGE_WEIGHT_FORMAT : FULL_MATRIX", "EDGE_WEIGHT_SECTION"]
+        lines += [" ".join(repr(float(v)) for v in row) for row in instance.weights]
+    coords = instance.coords
+    if np.all(np.isfinite(coords)):
+        lines.append("NODE_COORD_SECTION" if ewt != "EXPLICIT" else "DISPLAY_DATA_SECTION")
+        lines += [f"{i + 1} {x!r} {y!r}" for i, (x, y) in enumerate(coords.tolist())]
+    lines.append("GTSP_SET_SECTION")
+    for k, (offset, size) in enumerate(zip(instance.offsets, instance.sizes, strict=True)):
+        nodes = " ".join(str(v) for v in range(offset + 1, offset + size + 1))
+        lines.append(f"{k + 1} {nodes} -1")
+    lines.append("EOF")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,141 @@
+"""A GTSP priced for one omega: what most solvers work on.
+
+:func:`price` turns an :class:`~gtsp_bench.instance.Instance` and a weight ``omega`` into a
+:class:`Problem`: a cost per node and a symmetric cost per edge, with the depot (when there is one)
+as an extra one-node cluster. The cost of a closed tour through one node per cluster,
+
+    sum of node costs + sum of edge costs,
+
+equals the evaluator's objective (:func:`gtsp_bench.energy.evaluate`) for the same solution:
+
+* UAV instance: node cost = omega * ground energy of that head + (1 - omega) * E_{c_k};
+  edge cost = (1 - omega) * P_move / v_UAV * distance;
+* distance-only GTSP: node cost 0, edge cost = the TSPLIB weight.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from gtsp_bench.energy import check_omega, cluster_hover_energy, node_ground_energy
+from gtsp_bench.errors import InfeasibleSolutionError
+from gtsp_bench.instance import Instance, node_distance_matrix
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """A priced GTSP.
+
+    Attributes
+    ----------
+    instance
+        The instance it was priced from.
+    omega
+        The weight used (``None`` for a distance-only GTSP).
+    node_cost
+        ``(m,)`` cost of choosing each node; node ids are the instance's global ids, and the
+        depot, if any, is node ``m - 1`` with cost 0.
+    edge_cost
+        ``(m, m)`` symmetric edge costs, zero diagonal.
+    clusters
+        Node ids of each GTSP cluster: the K instance clusters in order, then ``[depot]``.
+    depot
+        Node id of the depot, or ``None``.
+    """
+
+    instance: Instance
+    omega: float | None
+    node_cost: np.ndarray
+    edge_cost: np.ndarray
+    clusters: tuple[np.ndarray, ...]
+    depot: int | None
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes, the depot included."""
+        return len(self.node_cost)
+
+    @property
+    def n_clusters(self) -> int:
+        """Number of GTSP clusters, the depot's included."""
+        return len(self.clusters)
+
+    @cached_property
+    def cluster_of(self) -> np.ndarray:
+        """GTSP cluster of each node, ``(m,)``."""
+        out = np.empty(self.n_nodes, dtype=np.int64)
+        for c, nodes in enumerate(self.clusters):
+            out[nodes] = c
+        return out
+
+    def tour_cost(self, tour: Sequence[int]) -> float:
+        """Cost of the closed tour through ``tour`` (node ids, one per cluster, any rotation)."""
+        t = np.asarray(tour, dtype=np.int64)
+        return float(self.node_cost[t].sum() + self.edge_cost[t, np.roll(t, -1)].sum())
+
+    def to_tour(self, order: Sequence[int], heads: Sequence[int]) -> np.ndarray:
+        """Node ids of a solution's tour, starting at the depot when there is one."""
+        order_arr, heads_arr = self.instance.check_solution(order, heads)
+        nodes = self.instance.offsets[order_arr] + heads_arr[order_arr]
+        if self.depot is not None:
+            nodes = np.concatenate([[self.depot], nodes])
+        return nodes
+
+    def to_solution(self, tour: Sequence[int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """Turn a closed tour of node ids (one per cluster) into ``(order, heads)``.
+
+        The tour is rotated so that the depot comes first; the depot is then dropped.
+
+        Raises
+        ------
+        InfeasibleSolutionError
+            If the tour does not hold exactly one node of every cluster.
+        """
+        t = np.asarray(tour, dtype=np.int64).reshape(-1)
+        if t.size and (t.min() < 0 or t.max() >= self.n_nodes):
+            raise InfeasibleSolutionError("tour names a node that does not exist")
+        clusters = self.cluster_of[t]
+        if len(t) != self.n_clusters or len(np.unique(clusters)) != self.n_clusters:
+            raise InfeasibleSolutionError("tour must hold exactly one node of every cluster")
+        if self.depot is not None:
+            start = int(np.flatnonzero(t == self.depot)[0])
+            t = np.roll(t, -start)[1:]
+        order = self.instance.cluster_of[t]
+        heads = np.empty(self.instance.n_clusters, dtype=np.int64)
+        heads[order] = t - self.instance.offsets[order]
+        return tuple(int(c) for c in order), tuple(int(h) for h in heads)
+
+
+def price(instance: Instance, omega: float | None) -> Problem:
+    """Price an instance for a weight ``omega`` (ignored for a distance-only GTSP).
+
+    Raises
+    ------
+    InputError
+        If ``omega`` is not in [0, 1] for a UAV instance.
+    """
+    dist = node_distance_matrix(instance)
+    n = instance.n_nodes
+    if instance.params is None:
+        w = None
+        node_cost = np.zeros(len(dist))
+        edge_cost = dist
+    else:
+        w = check_omega(omega)
+        hover = cluster_hover_energy(instance)[instance.cluster_of]
+        node_cost = w * node_ground_energy(instance) + (1.0 - w) * hover
+        if instance.depot is not None:
+            node_cost = np.append(node_cost, 0.0)
+        edge_cost = (1.0 - w) * instance.params.flight_energy_per_m * dist
+    clusters = [np.arange(o, o + s) for o, s in zip(instance.offsets, instance.sizes, strict=True)]
+    depot = None
+    if instance.depot is not None:
+        depot = n
+        clusters.append(np.array([n]))
+    for a in (node_cost, edge_cost, *clusters):
+        a.setflags(write=False)
+    return Problem(instance, w, node_cost, edge_cost, tuple(clusters), depot)

@@ -1,0 +1,311 @@
+"""Solver interface, registry and the checked harness every solve goes through.
+
+A solver is any class with a ``solve`` method (the :class:`Solver` protocol) returning a
+:class:`Solution`. It is registered under a name with :func:`register_solver`, by its class or by a
+``"module:Class"`` string so that heavy imports (torch, ortools, ...) happen only when it is used.
+:func:`run_solver` times a solve, then re-checks and re-prices the solution with the one evaluator
+(:func:`gtsp_bench.energy.evaluate`): a solver never reports its own number unchecked.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+from gtsp_bench.energy import Energy, check_omega, evaluate
+from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
+from gtsp_bench.instance import Instance
+
+#: Statuses a solution may have.
+STATUSES = ("optimal", "feasible", "time_limit", "failed")
+#: Relative tolerance between a solver's claimed objective and the evaluator's.
+REL_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What a solver returns; :func:`run_solver` checks and re-prices it.
+
+    Attributes
+    ----------
+    order
+        Cluster indices in visiting order (depot excluded), each cluster once.
+    heads
+        ``heads[k]``: index of cluster k's head inside cluster k.
+    objective
+        The objective the solver believes this solution has; a mismatch with the evaluator
+        (relative 1e-6) is a :class:`SolverError`.
+    status
+        ``"optimal"`` (proven), ``"feasible"``, ``"time_limit"`` (stopped by the limit; the best
+        solution found) or ``"failed"``.
+    lower_bound
+        A proven lower bound on the optimum, if the solver has one.
+    stats
+        Free-form solver statistics (iterations, nodes, gap, ...).
+    """
+
+    order: tuple[int, ...]
+    heads: tuple[int, ...]
+    objective: float
+    status: str = "feasible"
+    lower_bound: float | None = None
+    stats: Mapping[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class Solver(Protocol):
+    """The solver interface: one method.
+
+    ``time_limit`` is in seconds (``None``: the solver's own default); ``seed`` makes a randomised
+    solver reproducible. ``omega`` is ``None`` for distance-only instances.
+    """
+
+    def solve(
+        self, instance: Instance, omega: float | None, *, time_limit: float | None, seed: int
+    ) -> Solution:
+        """Solve ``instance`` for weight ``omega``."""
+        ...
+
+
+@dataclass(frozen=True)
+class Result:
+    """A checked, re-priced solution: what the CLI prints and the runner stores."""
+
+    instance: str
+    solver: str | None
+    omega: float | None
+    order: tuple[int, ...]
+    heads: tuple[int, ...]
+    objective: float
+    energy: Energy | None
+    distance: float
+    status: str
+    lower_bound: float | None
+    runtime_s: float
+    stats: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of ``gtsp-bench solve --json``."""
+        energy = None
+        if self.energy is not None:
+            energy = {k: getattr(self.energy, k) for k in ("total", "ground", "flight", "hover")}
+        return {
+            "instance": self.instance,
+            "solver": self.solver,
+            "omega": self.omega,
+            "order": list(self.order),
+            "heads": list(self.heads),
+            "objective": self.objective,
+            "energy": energy,
+            "distance": self.distance,
+            "status": self.status,
+            "lower_bound": self.lower_bound,
+            "runtime_s": self.runtime_s,
+        }
+
+    def summary(self) -> str:
+        """A few readable lines."""
+        unit = " J" if self.energy is not None else ""
+        lines = [
+            f"instance   {self.instance}",
+            f"solver     {self.solver or '(evaluated solution)'}"
+            + (f"  (omega = {self.omega:g})" if self.omega is not None else ""),
+            f"status     {self.status}",
+            f"objective  {self.objective:.6f}{unit}",
+        ]
+        if self.lower_bound is not None:
+            lines.append(f"bound      {self.lower_bound:.6f}{unit}")
+        if self.energy is not None:
+            e = self.energy
+            lines.append(
+                f"energy     ground {e.ground:.3f} J, flight {e.flight:.3f} J, hover {e.hover:.3f} J"
+            )
+        lines.append(f"distance   {self.distance:.3f}")
+        lines.append("tour       " + " -> ".join(
+            (["depot"] if self.energy is not None else [])
+            + [f"{c}[{self.heads[c]}]" for c in self.order]
+            + (["depot"] if self.energy is not None else [])
+        ))
+        lines.append(f"runtime    {self.runtime_s:.3f} s")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------- registry
+@dataclass(frozen=True)
+class SolverSpec:
+    """A registered solver: its name, where its class lives and one line describing it."""
+
+    name: str
+    target: str | type
+    description: str
+
+    def load(self) -> type:
+        """Import and return the solver class."""
+        if not isinstance(self.target, str):
+            return self.target
+        module_name, _, attr = self.target.partition(":")
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as e:
+            raise InputError(f"solver {self.name!r} is not available: {e}") from None
+        return getattr(module, attr)
+
+
+_REGISTRY: dict[str, SolverSpec] = {}
+_builtins_loaded = False
+
+
+def register_solver(name: str, target: str | type, description: str, *, replace: bool = False) -> None:
+    """Register a solver class under ``name``.
+
+    Parameters
+    ----------
+    name
+        The name used by ``--solver`` and the runner.
+    target
+        The class, or ``"module:Class"`` to import it only when used.
+    description
+        One line for ``gtsp-bench solvers``.
+    replace
+        Allow re-registering an existing name.
+    """
+    if not replace and name in _REGISTRY and _REGISTRY[name].target != target:
+        raise ValueError(f"a solver named {name!r} is already registered")
+    _REGISTRY[name] = SolverSpec(name, target, description)
+
+
+def _registry() -> dict[str, SolverSpec]:
+    global _builtins_loaded
+    if not _builtins_loaded:
+        _builtins_loaded = True
+        importlib.import_module("solvers")  # registers the built-in solvers (cheap imports only)
+    return _REGISTRY
+
+
+def solver_specs() -> list[SolverSpec]:
+    """All registered solvers, sorted by name."""
+    return sorted(_registry().values(), key=lambda s: s.name)
+
+
+def solver_names() -> list[str]:
+    """Names of all registered solvers, sorted."""
+    return [s.name for s in solver_specs()]
+
+
+def get_solver(name: str, **options: Any) -> Solver:
+    """Instantiate a registered solver with keyword options.
+
+    Raises
+    ------
+    InputError
+        For an unknown name (listing the valid ones) or an option the solver does not take.
+    """
+    registry = _registry()
+    if name not in registry:
+        raise InputError(f"unknown solver {name!r} (valid: {', '.join(solver_names())})")
+    cls = registry[name].load()
+    if options:
+        params = inspect.signature(cls).parameters
+        takes_kwargs = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+        unknown = [k for k in options if k not in params]
+        if unknown and not takes_kwargs:
+            valid = ", ".join(params) or "none"
+            raise InputError(f"solver {name!r} has no option {unknown[0]!r} (options: {valid})")
+    return cls(**options)
+
+
+# ---------------------------------------------------------------------- harness
+def check_time_limit(time_limit: float | None) -> float | None:
+    """Return a valid time limit (seconds, > 0, or ``None``) or raise :class:`InputError`."""
+    if time_limit is None:
+        return None
+    if isinstance(time_limit, bool) or not isinstance(time_limit, (int, float)):
+        raise InputError(f"time limit must be a number of seconds, got {time_limit!r}")
+    if not time_limit > 0 or math.isnan(time_limit):
+        raise InputError(f"time limit must be > 0 seconds, got {time_limit!r}")
+    return float(time_limit)
+
+
+def run_solver(
+    solver: Solver | str,
+    instance: Instance,
+    omega: float | None = 0.5,
+    *,
+    time_limit: float | None = None,
+    seed: int = 0,
+    name: str | None = None,
+) -> Result:
+    """Solve, time, check and re-price.
+
+    Parameters
+    ----------
+    solver
+        A solver object or a registered name.
+    instance
+        The instance.
+    omega
+        Weight of the ground energy in [0, 1] (ignored for distance-only instances).
+    time_limit
+        Seconds (``None``: the solver's default).
+    seed
+        Random seed.
+    name
+        Name recorded in the result (default: the registered name or the class name).
+
+    Raises
+    ------
+    InputError
+        Bad omega or time limit, or an unknown solver name.
+    SolverError
+        The solver failed, or returned an infeasible solution, an unknown status, a claimed
+        objective the evaluator does not confirm, or a lower bound above the objective.
+    """
+    if isinstance(solver, str):
+        name = name or solver
+        solver = get_solver(solver)
+    name = name or type(solver).__name__
+    w = check_omega(omega) if instance.is_uav else None
+    time_limit = check_time_limit(time_limit)
+    start = time.perf_counter()
+    sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
+    runtime = time.perf_counter() - start
+    if not isinstance(sol, Solution):
+        raise SolverError(f"solver {name!r} returned {type(sol).__name__}, not a Solution")
+    if sol.status not in STATUSES:
+        raise SolverError(f"solver {name!r} returned unknown status {sol.status!r}")
+    if sol.status == "failed":
+        raise SolverError(f"solver {name!r} failed on {instance.name}")
+    try:
+        ev = evaluate(instance, w, sol.order, sol.heads)
+    except InfeasibleSolutionError as e:
+        raise SolverError(f"solver {name!r} returned an infeasible solution: {e}") from None
+    tol = REL_TOL * max(1.0, abs(ev.objective))
+    if not math.isfinite(sol.objective) or abs(sol.objective - ev.objective) > tol:
+        raise SolverError(
+            f"solver {name!r} claims objective {sol.objective!r} but the evaluator finds "
+            f"{ev.objective!r} on {instance.name}"
+        )
+    if sol.lower_bound is not None and sol.lower_bound > ev.objective + tol:
+        raise SolverError(
+            f"solver {name!r} claims lower bound {sol.lower_bound!r} above its objective "
+            f"{ev.objective!r} on {instance.name}"
+        )
+    return Result(
+        instance=instance.name,
+        solver=name,
+        omega=w,
+        order=tuple(int(c) for c in sol.order),
+        heads=tuple(int(h) for h in sol.heads),
+        objective=ev.objective,
+        energy=ev.energy,
+        distance=ev.distance,
+        status=sol.status,
+        lower_bound=None if sol.lower_bound is None else float(sol.lower_bound),
+        runtime_s=runtime,
+        stats=dict(sol.stats),
+    )

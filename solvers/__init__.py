@@ -1,0 +1,12 @@
+"""Built-in solvers, one module each. Registering one is one line below.
+
+Targets are ``"module:Class"`` strings so that a solver's heavy imports (torch, highspy,
+ortools, ...) happen only when it is used. To add your own, see the README ("Adding a solver").
+"""
+
+from gtsp_bench.registry import register_solver
+
+register_solver("greedy", "solvers.greedy:Greedy",
+                "paper's greedy: next (cluster, head) with the least added weighted energy")
+register_solver("brute", "solvers.brute:Brute",
+                "exhaustive search over orders and heads (exact; tiny instances only)")

@@ -1,0 +1,69 @@
+"""The generator: seeded, inside the area, non-overlapping, fails fast when impossible."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_batch, generate_instance
+
+
+def test_same_seed_same_instance_other_seed_other_instance():
+    """Generation is reproducible from the seed alone."""
+    a, b = generate_instance(7, seed=3), generate_instance(7, seed=3)
+    c = generate_instance(7, seed=4)
+    for x, y in zip(a.clusters, b.clusters, strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert not np.array_equal(a.coords, c.coords)
+    assert a.name == "uav-K7-N20-s3"
+    assert a.depot.tolist() == [500.0, 0.0]
+
+
+@pytest.mark.parametrize(("k", "zeta"), [(4, 50.0), (10, 50.0), (30, 50.0), (10, 100.0)])
+def test_clusters_inside_area_and_not_overlapping(k, zeta):
+    """Every node lies in its cluster's square; squares are inside the area and disjoint."""
+    coords = generate_batch(np.random.default_rng(k), 50, k, 20, zeta=zeta)
+    assert coords.shape == (50, k, 20, 2)
+    lo, hi = coords.min(axis=2), coords.max(axis=2)  # (B, K, 2) bounding boxes
+    assert np.all(hi - lo <= 2 * zeta)
+    centres = (lo + hi) / 2
+    assert np.all(lo > 0) and np.all(hi < 1000)
+    # Squares of half-width zeta around the true centres are disjoint, so any two clusters are
+    # separated along some axis by at least the width of their bounding boxes' gap.
+    for b in range(50):
+        for i in range(k):
+            for j in range(i):
+                sep = np.maximum(lo[b, i] - hi[b, j], lo[b, j] - hi[b, i])
+                assert np.max(sep) > -1e-9, (b, i, j, centres[b, i], centres[b, j])
+
+
+def test_impossible_settings_fail_fast_with_a_clear_message():
+    """Too many clusters for the area is refused at once, not after an endless loop."""
+    start = time.perf_counter()
+    with pytest.raises(InputError, match=r"would cover .* at most 50%"):
+        generate_instance(60, seed=0, zeta=50.0)
+    with pytest.raises(InputError, match="must exceed 2 \\* zeta"):
+        generate_instance(1, seed=0, zeta=600.0)
+    assert time.perf_counter() - start < 1.0
+
+
+@pytest.mark.parametrize("bad", [{"n_clusters": 0}, {"n_nodes": 0}, {"zeta": -1.0}])
+def test_bad_arguments(bad):
+    """Non-positive K, N or zeta are rejected."""
+    args = {"n_clusters": 3, "n_nodes": 5, "zeta": 50.0} | bad
+    with pytest.raises(InputError):
+        generate_instance(args["n_clusters"], args["n_nodes"], seed=0, zeta=args["zeta"])
+
+
+def test_centres_are_two_zeta_apart_along_some_axis():
+    """The centres themselves satisfy the non-overlap rule max(|dx|, |dy|) >= 2 zeta."""
+    from gtsp_bench.generator import generate_centres
+
+    c = generate_centres(np.random.default_rng(1), 20, 25, 50.0, 1000.0)
+    gap = np.abs(c[:, :, None, :] - c[:, None, :, :]).max(axis=-1)
+    gap[:, np.arange(25), np.arange(25)] = np.inf
+    assert gap.min() >= 100.0
+    assert c.min() >= 50.0 and c.max() <= 950.0

@@ -1,0 +1,91 @@
+"""The instance model: validation, immutability, global numbering, TSPLIB distance rules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance, node_distance_matrix, pair_distances, tour_length
+
+
+def test_global_numbering(tiny):
+    """Nodes are numbered in cluster order; offsets, sizes and cluster_of agree."""
+    assert tiny.n_clusters == 2
+    assert tiny.n_nodes == 3
+    assert tiny.sizes.tolist() == [1, 2]
+    assert tiny.offsets.tolist() == [0, 1]
+    assert tiny.cluster_of.tolist() == [0, 1, 1]
+    assert tiny.coords.tolist() == [[0, 300], [400, 300], [300, 0]]
+    assert tiny.is_uav
+
+
+def test_arrays_are_read_only(tiny):
+    """The instance cannot be changed in place."""
+    with pytest.raises(ValueError, match="read-only"):
+        tiny.clusters[0][0, 0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        tiny.depot[0] = 1.0
+    with pytest.raises(AttributeError):
+        tiny.name = "other"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"clusters": ()}, "at least one cluster"),
+        ({"clusters": (np.zeros((0, 2)),)}, "cluster 0 is empty"),
+        ({"clusters": (np.array([[0.0, np.nan]]),)}, "cluster 0 has a NaN"),
+        ({"clusters": (np.array([[0.0, np.inf]]),)}, "cluster 0 has a NaN or infinite"),
+        ({"clusters": (np.zeros((2, 3)),)}, r"cluster 0 must be a list of \[x, y\] pairs"),
+        ({"clusters": (np.zeros((1, 2)),), "depot": np.array([np.nan, 0.0])}, "depot has a NaN"),
+        ({"clusters": (np.zeros((1, 2)),), "edge_weight_type": "EUC_2D"}, "must use EUCLIDEAN"),
+        ({"clusters": (np.zeros((1, 2)),), "edge_weight_type": "XRAY", "params": None},
+         "unknown edge weight type"),
+        ({"clusters": (np.zeros((2, 2)),), "edge_weight_type": "EXPLICIT", "params": None},
+         "need a weight matrix"),
+    ],
+)
+def test_invalid_instances_are_rejected(kwargs, message):
+    """Each malformed instance raises InputError naming the problem."""
+    with pytest.raises(InputError, match=message):
+        Instance(name="bad", **kwargs)
+
+
+def test_tsplib_distance_rules():
+    """EUC_2D rounds to nearest, CEIL_2D rounds up, ATT is pseudo-Euclidean (TSPLIB95)."""
+    a, b = np.array([0.0, 0.0]), np.array([1.0, 1.0])  # 1.414...
+    assert pair_distances(a, b, "EUCLIDEAN") == pytest.approx(2**0.5)
+    assert pair_distances(a, b, "EUC_2D") == 1.0
+    assert pair_distances(a, np.array([1.5, 1.0]), "EUC_2D") == 2.0  # 1.803 -> 2
+    assert pair_distances(a, b, "CEIL_2D") == 2.0
+    # ATT: r = sqrt(200 / 10) = 4.47, nint = 4 < r, so 5.
+    assert pair_distances(a, np.array([10.0, 10.0]), "ATT") == 5.0
+    # ATT: r = sqrt(250 / 10) = 5 exactly, so 5.
+    assert pair_distances(a, np.array([15.0, 5.0]), "ATT") == 5.0
+
+
+def test_geo_distance_follows_tsplib():
+    """GEO: coordinates are DDD.MM; the TSPLIB formula with RRR = 6378.388 and the +1 rounding."""
+    # Two points one degree of latitude apart on the same meridian: 6378.388 * pi/180 = 111.3 km.
+    d = pair_distances(np.array([10.0, 20.0]), np.array([11.0, 20.0]), "GEO")
+    assert d == 112.0  # int(111.32 + 1.0)
+    # 30 minutes (x.30) is half a degree.
+    d_half = pair_distances(np.array([10.0, 20.0]), np.array([10.30, 20.0]), "GEO")
+    assert d_half == 56.0  # int(55.66 + 1.0)
+
+
+def test_distance_matrix_puts_the_depot_last(tiny):
+    """The matrix has the depot as its last row and column, zero diagonal, symmetric."""
+    w = node_distance_matrix(tiny)
+    assert w.shape == (4, 4)
+    assert w[3, 0] == 300.0 and w[3, 2] == 300.0
+    np.testing.assert_array_equal(w, w.T)
+    assert np.all(np.diag(w) == 0)
+
+
+def test_tour_length_without_depot_is_a_cycle():
+    """Without a depot the tour closes on its first node."""
+    inst = Instance(name="c", clusters=(np.array([[0.0, 0.0]]), np.array([[3.0, 4.0]]),
+                                         np.array([[3.0, 0.0]])), params=None)
+    assert tour_length(inst, np.array([0, 1, 2]), np.array([0, 0, 0])) == pytest.approx(12.0)

@@ -1,0 +1,159 @@
+"""Parsing and formatting (no files): JSON instances, solutions, GTSPLIB text."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.parse import (
+    format_gtsp,
+    format_json_instance,
+    parse_gtsp,
+    parse_json_instance,
+    parse_solution,
+)
+
+from .conftest import gtsplib_files
+
+GOOD = {"name": "x", "depot": [500, 0], "clusters": [[[1, 2], [3, 4]], [[5, 6]]]}
+
+
+def _text(**changes) -> str:
+    return json.dumps(GOOD | changes)
+
+
+def test_json_instance_round_trip():
+    """format -> parse gives the same clusters, depot, parameters and meta."""
+    inst = parse_json_instance(_text(params={"height": 60}, meta={"seed": 1}))
+    again = parse_json_instance(format_json_instance(inst))
+    assert again.name == "x"
+    assert [c.tolist() for c in again.clusters] == [[[1, 2], [3, 4]], [[5, 6]]]
+    assert again.depot.tolist() == [500, 0]
+    assert again.params == inst.params and again.params.height == 60
+    assert dict(again.meta) == {"seed": 1}
+
+
+def test_json_depot_may_be_null():
+    """A null depot gives a closed tour without a depot."""
+    assert parse_json_instance(_text(depot=None)).depot is None
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("{", "invalid JSON"),
+        ("[]", "must be a JSON object"),
+        (json.dumps({"name": "x"}), "missing key 'clusters'"),
+        (_text(clusters=[]), "non-empty list"),
+        (_text(clusters=[[]]), r"clusters\[0\] is empty"),
+        (_text(clusters=[[[1, 2]], []]), r"clusters\[1\] is empty"),
+        (_text(clusters=[[[1]]]), r"clusters\[0\]\[0\] must be a pair"),
+        (_text(clusters=[[[1, "a"]]]), r"clusters\[0\]\[0\] must be a pair"),
+        ('{"clusters": [[[1, NaN]]]}', "NaN is not a number"),
+        ('{"clusters": [[[1, Infinity]]]}', "Infinity is not a number"),
+        ('{"clusters": [[[1, 1e999]]]}', "NaN or infinite"),
+        (_text(depot=[1]), "depot must be a pair"),
+        (_text(params={"hieght": 1}), "unknown energy parameter 'hieght'"),
+        (_text(params={"height": -1}), "'height' must be > 0"),
+        (_text(params=[1]), "'params' must be an object"),
+        (_text(extra=1), "unknown key 'extra'"),
+        (_text(name=""), "'name' must be a non-empty string"),
+    ],
+)
+def test_bad_json_instances(text, message):
+    """Each malformed instance gives an InputError naming the problem."""
+    with pytest.raises(InputError, match=message):
+        parse_json_instance(text)
+
+
+def test_solution_parsing():
+    """Only order and heads are read; other keys are ignored; bad shapes are rejected."""
+    assert parse_solution('{"order": [1, 0], "heads": [2, 3], "objective": 5}') == ([1, 0], [2, 3])
+    with pytest.raises(InputError, match="missing key 'heads'"):
+        parse_solution('{"order": [0]}')
+    with pytest.raises(InputError, match="'order' must be a list of integers"):
+        parse_solution('{"order": [0.5], "heads": [0]}')
+
+
+@pytest.mark.parametrize("path", gtsplib_files(), ids=lambda p: p.stem)
+def test_every_sample_gtsplib_file_parses_and_round_trips(path):
+    """Every shared .gtsp parses with the announced sizes, and write -> read keeps it intact."""
+    inst = parse_gtsp(path.read_text())
+    n_sets = int("".join(ch for ch in path.stem[:3] if ch.isdigit()))  # "11berlin52" -> 11
+    header = dict(
+        line.split(":", 1) for line in path.read_text().splitlines()[:8] if ":" in line
+    )
+    header = {k.strip(): v.strip() for k, v in header.items()}
+    assert inst.n_clusters == int(header["GTSP_SETS"])
+    assert inst.n_nodes == int(header["DIMENSION"])
+    assert inst.edge_weight_type == header["EDGE_WEIGHT_TYPE"]
+    assert inst.params is None and inst.depot is None
+    assert n_sets == inst.n_clusters
+    again = parse_gtsp(format_gtsp(inst))
+    assert again.name == inst.name
+    assert again.edge_weight_type == inst.edge_weight_type
+    for a, b in zip(inst.clusters, again.clusters, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+SMALL = "\n".join([
+    "NAME: small", "TYPE: GTSP", "DIMENSION: 4", "GTSP_SETS: 2", "EDGE_WEIGHT_TYPE: EUC_2D",
+    "NODE_COORD_SECTION", "1 0 0", "2 3 4", "3 6 8", "4 0 5",
+    "GTSP_SET_SECTION:", "1 1 3", "-1", "2 2 4 -1", "EOF", "",
+])
+
+
+def test_separator_variants_and_wrapped_sets():
+    """'KEY: v', 'SECTION:' and a set record spread over two lines are accepted."""
+    inst = parse_gtsp(SMALL)
+    assert [c.tolist() for c in inst.clusters] == [[[0, 0], [6, 8]], [[3, 4], [0, 5]]]
+    assert inst.meta["node_ids"] == [1, 3, 2, 4]
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("2 2 4 -1", "2 2 4 1 -1", "node 1 is in set 1 and in set 2"),
+        ("2 2 4 -1", "2 2 -1", "node 4 is in no set"),
+        ("2 2 4 -1", "2 2 4", "set 2 is not terminated by -1"),
+        ("GTSP_SETS: 2", "GTSP_SETS: 3", "GTSP_SETS says 3 sets"),
+        ("EUC_2D", "XRAY", "unsupported EDGE_WEIGHT_TYPE 'XRAY'"),
+        ("4 0 5", "4 0 nan", "node 4 has a NaN"),
+        ("4 0 5", "4 0", "bad coordinate line"),
+        ("4 0 5\n", "", "node 4 has no coordinates"),
+        ("DIMENSION: 4", "DIMENSION: four", "DIMENSION must be an integer"),
+        ("2 2 4 -1", "2 2 9 -1", "names node 9, outside 1..4"),
+        ("GTSP_SETS: 2\n", "", "missing GTSP_SETS"),
+    ],
+)
+def test_bad_gtsplib_text(old, new, message):
+    """Duplicate membership, missing nodes, bad numbers... each give a clear InputError."""
+    with pytest.raises(InputError, match=message):
+        parse_gtsp(SMALL.replace(old, new))
+
+
+EXPLICIT = "\n".join([
+    "NAME: e", "TYPE: GTSP", "DIMENSION: 3", "GTSP_SETS: 2", "EDGE_WEIGHT_TYPE: EXPLICIT",
+    "EDGE_WEIGHT_FORMAT: FULL_MATRIX", "EDGE_WEIGHT_SECTION", "0 1 2", "1 0 3", "2 3 0",
+    "GTSP_SET_SECTION", "1 3 -1", "2 1 2 -1", "EOF", "",
+])
+
+
+def test_explicit_full_matrix_round_trip():
+    """EXPLICIT FULL_MATRIX weights are read in cluster order and written back."""
+    inst = parse_gtsp(EXPLICIT)
+    # Node order is [3, 1, 2]: weight(3, 1) = 2, weight(3, 2) = 3.
+    assert inst.weights[0].tolist() == [0, 2, 3]
+    again = parse_gtsp(format_gtsp(inst))
+    np.testing.assert_array_equal(again.weights, inst.weights)
+
+
+def test_formats_refuse_the_wrong_kind(tiny):
+    """A UAV instance is not written as .gtsp, nor a GTSPLIB one as JSON."""
+    with pytest.raises(InputError, match=r"write it as \.json"):
+        format_gtsp(tiny)
+    with pytest.raises(InputError, match=r"write it as \.gtsp"):
+        format_json_instance(parse_gtsp(SMALL))

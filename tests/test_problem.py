@@ -1,0 +1,60 @@
+"""The priced GTSP: its tour cost equals the evaluator, conversions round-trip."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtsp_bench.energy import evaluate
+from gtsp_bench.errors import InfeasibleSolutionError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
+
+from .conftest import GTSPLIB
+
+
+@pytest.mark.parametrize("omega", [0.0, 0.3, 0.9, 1.0])
+def test_tour_cost_equals_evaluator_on_random_solutions(omega):
+    """Node + edge costs of the priced problem equal evaluate() on random tours."""
+    inst = generate_instance(5, 7, seed=11)
+    problem = price(inst, omega)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        order = rng.permutation(5).tolist()
+        heads = rng.integers(0, 7, size=5).tolist()
+        tour = problem.to_tour(order, heads)
+        assert tour[0] == problem.depot
+        assert problem.tour_cost(tour) == pytest.approx(
+            evaluate(inst, omega, order, heads).objective, rel=1e-12)
+        assert problem.to_solution(tour) == (tuple(order), tuple(heads))
+        # Any rotation of the tour gives the same solution.
+        assert problem.to_solution(np.roll(tour, 3)) == (tuple(order), tuple(heads))
+
+
+def test_depot_is_its_own_cluster_with_zero_cost(tiny):
+    """The depot is the last node, alone in the last cluster, and costs nothing."""
+    problem = price(tiny, 0.5)
+    assert problem.depot == 3
+    assert problem.n_clusters == 3
+    assert problem.clusters[-1].tolist() == [3]
+    assert problem.node_cost[3] == 0.0
+    assert problem.cluster_of.tolist() == [0, 1, 1, 2]
+
+
+def test_gtsplib_problem_has_no_node_costs():
+    """A GTSPLIB file prices to integer edge weights and zero node costs."""
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp")
+    problem = price(inst, None)
+    assert problem.depot is None
+    assert np.all(problem.node_cost == 0)
+    assert np.all(problem.edge_cost == np.round(problem.edge_cost))
+
+
+def test_to_solution_rejects_bad_tours(tiny):
+    """A tour missing a cluster or naming a missing node is rejected."""
+    problem = price(tiny, 0.5)
+    with pytest.raises(InfeasibleSolutionError):
+        problem.to_solution([3, 1, 2])  # two nodes of cluster 1, none of cluster 0
+    with pytest.raises(InfeasibleSolutionError):
+        problem.to_solution([3, 0, 9])

@@ -1,0 +1,98 @@
+"""Registry and harness: unknown names, plug-in solvers, and the checks on what solvers claim."""
+
+from __future__ import annotations
+
+import pytest
+
+from gtsp_bench.errors import InputError, SolverError
+from gtsp_bench.registry import (
+    Solution,
+    get_solver,
+    register_solver,
+    run_solver,
+    solver_names,
+)
+
+
+class Fixed:
+    """A test solver that returns whatever it was built with."""
+
+    def __init__(self, order=(0, 1), heads=(0, 1), objective=None, status="feasible",
+                 lower_bound=None):
+        self.args = (order, heads, objective, status, lower_bound)
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        order, heads, objective, status, lower_bound = self.args
+        if objective is None:
+            from gtsp_bench.energy import evaluate
+
+            objective = evaluate(instance, omega, order, heads).objective
+        return Solution(order, heads, objective, status, lower_bound)
+
+
+def test_builtin_solvers_are_registered():
+    """greedy and brute are there."""
+    assert {"greedy", "brute"} <= set(solver_names())
+
+
+def test_unknown_solver_lists_valid_names():
+    """The error names the valid solvers."""
+    with pytest.raises(InputError, match=r"unknown solver 'nope' \(valid: .*brute.*greedy"):
+        get_solver("nope")
+
+
+def test_unknown_option_lists_valid_options():
+    """An option the solver does not take is rejected with the ones it does take."""
+    with pytest.raises(InputError, match=r"solver 'brute' has no option 'ants' \(options: max_tours\)"):
+        get_solver("brute", ants=3)
+
+
+def test_a_user_solver_plugs_in_with_one_registration(tiny):
+    """register_solver makes a class usable by name; its result is re-priced."""
+    register_solver("test-fixed", Fixed, "fixed tour for tests", replace=True)
+    assert "test-fixed" in solver_names()
+    result = run_solver("test-fixed", tiny, 0.5)
+    assert result.solver == "test-fixed"
+    assert result.order == (0, 1) and result.heads == (0, 1)
+    assert result.energy is not None and result.energy.total == result.objective
+    assert result.runtime_s >= 0
+
+
+def test_registering_a_taken_name_is_an_error():
+    """A second, different class under a taken name needs replace=True."""
+    with pytest.raises(ValueError, match="already registered"):
+        register_solver("greedy", Fixed, "clash")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"objective": 1.0}, "claims objective 1.0 but the evaluator finds"),
+        ({"order": (0, 0), "objective": 1.0}, "infeasible solution: cluster 0 is visited 2 times"),
+        ({"heads": (0, 5), "objective": 1.0}, r"infeasible solution: heads\[1\] = 5"),
+        ({"status": "great"}, "unknown status 'great'"),
+        ({"status": "failed"}, "failed on tiny"),
+        ({"lower_bound": 1e9}, "lower bound 1000000000.0 above its objective"),
+        ({"objective": float("nan")}, "claims objective nan"),
+    ],
+)
+def test_harness_rejects_what_the_evaluator_does_not_confirm(tiny, kwargs, message):
+    """A wrong claim, an infeasible tour, an unknown status or a bad bound is a SolverError."""
+    with pytest.raises(SolverError, match=message):
+        run_solver(Fixed(**kwargs), tiny, 0.5)
+
+
+def test_harness_checks_omega_and_time_limit(tiny):
+    """Bad omega or time limit are input errors raised before solving."""
+    with pytest.raises(InputError, match="omega"):
+        run_solver(Fixed(), tiny, 2.0)
+    with pytest.raises(InputError, match="time limit must be > 0"):
+        run_solver(Fixed(), tiny, 0.5, time_limit=-1)
+
+
+def test_result_json_shape(tiny):
+    """to_dict has exactly the CLI's keys."""
+    d = run_solver(Fixed(), tiny, 0.5).to_dict()
+    assert list(d) == ["instance", "solver", "omega", "order", "heads", "objective", "energy",
+                       "distance", "status", "lower_bound", "runtime_s"]
+    assert list(d["energy"]) == ["total", "ground", "flight", "hover"]
