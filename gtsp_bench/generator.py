@@ -137,3 +137,24 @@ def generate_instance(
         meta={"generator": {"n_clusters": n_clusters, "n_nodes": n_nodes, "zeta": zeta,
                             "area": area, "seed": np.atleast_1d(seed).tolist()}},
     )
+
+
+def instance_set(
+    n_instances: int,
+    n_clusters: int,
+    seed: int,
+    n_nodes: int = DEFAULT_NODES,
+    *,
+    zeta: float = DEFAULT_ZETA,
+    params: EnergyParams | None = None,
+) -> list[Instance]:
+    """A seeded benchmark set: instance i is ``generate_instance(K, N, seed=[seed, K, i])``.
+
+    Instance i is the same whatever ``n_instances`` is, so a larger set extends a smaller one.
+    Names are ``uav-K{K}-N{N}-s{seed}-{i:03d}``.
+    """
+    return [
+        generate_instance(n_clusters, n_nodes, [seed, n_clusters, i], zeta=zeta, params=params,
+                          name=f"uav-K{n_clusters}-N{n_nodes}-s{seed}-{i:03d}")
+        for i in range(n_instances)
+    ]

@@ -143,6 +143,7 @@ class SolverSpec:
     name: str
     target: str | type
     description: str
+    bench: bool = True
 
     def load(self) -> type:
         """Import and return the solver class."""
@@ -160,7 +161,9 @@ _REGISTRY: dict[str, SolverSpec] = {}
 _builtins_loaded = False
 
 
-def register_solver(name: str, target: str | type, description: str, *, replace: bool = False) -> None:
+def register_solver(
+    name: str, target: str | type, description: str, *, bench: bool = True, replace: bool = False
+) -> None:
     """Register a solver class under ``name``.
 
     Parameters
@@ -171,12 +174,14 @@ def register_solver(name: str, target: str | type, description: str, *, replace:
         The class, or ``"module:Class"`` to import it only when used.
     description
         One line for ``gtsp-bench solvers``.
+    bench
+        Whether the runner uses it by default (``False`` for test oracles and duplicates).
     replace
         Allow re-registering an existing name.
     """
     if not replace and name in _REGISTRY and _REGISTRY[name].target != target:
         raise ValueError(f"a solver named {name!r} is already registered")
-    _REGISTRY[name] = SolverSpec(name, target, description)
+    _REGISTRY[name] = SolverSpec(name, target, description, bench)
 
 
 def _registry() -> dict[str, SolverSpec]:

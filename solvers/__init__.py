@@ -9,4 +9,4 @@ from gtsp_bench.registry import register_solver
 register_solver("greedy", "solvers.greedy:Greedy",
                 "paper's greedy: next (cluster, head) with the least added weighted energy")
 register_solver("brute", "solvers.brute:Brute",
-                "exhaustive search over orders and heads (exact; tiny instances only)")
+                "exhaustive search over orders and heads (exact; tiny instances only)", bench=False)

@@ -67,3 +67,13 @@ def test_centres_are_two_zeta_apart_along_some_axis():
     gap[:, np.arange(25), np.arange(25)] = np.inf
     assert gap.min() >= 100.0
     assert c.min() >= 50.0 and c.max() <= 950.0
+
+
+def test_instance_set_is_prefix_stable():
+    """Instance i of a set does not depend on the set's size; names carry K, seed and index."""
+    from gtsp_bench.generator import instance_set
+
+    small, big = instance_set(2, 4, seed=9), instance_set(5, 4, seed=9)
+    np.testing.assert_array_equal(small[1].coords, big[1].coords)
+    assert big[4].name == "uav-K4-N20-s9-004"
+    assert not np.array_equal(big[0].coords, big[1].coords)

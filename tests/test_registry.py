@@ -96,3 +96,11 @@ def test_result_json_shape(tiny):
     assert list(d) == ["instance", "solver", "omega", "order", "heads", "objective", "energy",
                        "distance", "status", "lower_bound", "runtime_s"]
     assert list(d["energy"]) == ["total", "ground", "flight", "hover"]
+
+
+def test_bench_flag():
+    """Test oracles are registered with bench=False so the runner skips them by default."""
+    from gtsp_bench.registry import solver_specs
+
+    flags = {s.name: s.bench for s in solver_specs()}
+    assert flags["brute"] is False and flags["greedy"] is True
