@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 # Clusters for `make bench` (a range 4..10 or a list 4,7).
 K      ?= 4..10
 
-.PHONY: install test lint bench bench-quick clean
+.PHONY: install test lint bench bench-quick bench-heuristics clean
 
 install: $(STAMP)
 
@@ -25,6 +25,10 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/gtsp-bench solvers
+
+# Heuristics side by side (benchmarks/heuristics.py); QUICK=1 for a subset.
+bench-heuristics: $(STAMP)
+	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -46,7 +46,8 @@ def aco_search(
     Returns
     -------
     tour, cost, iterations_done, timed_out
-        The best tour found (node ids, starting at the depot when there is one), its cost, the
+        The best tour the ants found (node ids, starting at the depot when there is one; the
+        greedy tour if the deadline stopped the run before the first iteration), its cost, the
         number of completed iterations, and whether the deadline stopped the run early.
     """
     edge, node, cluster_of = problem.edge_cost, problem.node_cost, problem.cluster_of
@@ -57,11 +58,10 @@ def aco_search(
     np.fill_diagonal(visibility, 0.0)
     in_cluster = cluster_of[None, :] == np.arange(k)[:, None]  # (clusters, nodes)
 
-    start = anchor_node(problem)
-    reference = problem.tour_cost(greedy_tour(problem, start))
-    tau = np.full((m, m), ants * q / max(reference, 1e-300))
+    greedy = greedy_tour(problem, anchor_node(problem))  # sets tau0; the answer if no ant ran
+    tau = np.full((m, m), ants * q / max(problem.tour_cost(greedy), 1e-300))
 
-    best_tour, best_cost = greedy_tour(problem, start), reference
+    best_tour, best_cost = greedy, math.inf
     done, timed_out = 0, False
     for _ in range(iterations):
         if is_past(deadline):
@@ -120,6 +120,9 @@ class Aco:
         Pheromone an ant deposits, divided by its tour's cost (> 0).
     """
 
+    #: Whether the shared local search polishes the best tour (``aco+ls``).
+    local_search = False
+
     def __init__(
         self, ants: int = 30, iterations: int = 200, rho: float = 0.1, alpha: float = 1.0,
         beta: float = 5.0, q: float = 1.0,
@@ -144,26 +147,21 @@ class Aco:
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
         seed: int = 0,
     ) -> Solution:
-        """Run the colony; stop early with status ``time_limit`` when the limit passes."""
+        """Run the colony (then the local search for ``aco+ls``); stop early with status
+        ``time_limit`` when the limit passes."""
         deadline = deadline_after(time_limit)
         problem = price(instance, omega)
         tour, cost, done, timed_out = self.search(problem, deadline=deadline, seed=seed)
+        stats = {"iterations": done}
+        if self.local_search:
+            return improved_solution(problem, tour, deadline, timed_out=timed_out, stats=stats)
         order, heads = problem.to_solution(tour)
         return Solution(order, heads, objective=cost,
-                        status="time_limit" if timed_out else "feasible",
-                        stats={"iterations": done})
+                        status="time_limit" if timed_out else "feasible", stats=stats)
 
 
 class AcoLS(Aco):
-    """:class:`Aco`, then the shared local search (:mod:`solvers.local_search`) on its best tour."""
+    """:class:`Aco`, then the shared local search (:mod:`solvers.local_search`) on its best tour,
+    in the time left."""
 
-    def solve(
-        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
-    ) -> Solution:
-        """Run the colony, then improve its best tour in the time left."""
-        deadline = deadline_after(time_limit)
-        problem = price(instance, omega)
-        tour, _, done, timed_out = self.search(problem, deadline=deadline, seed=seed)
-        return improved_solution(problem, tour, deadline, timed_out=timed_out,
-                                 stats={"iterations": done})
+    local_search = True
