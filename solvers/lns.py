@@ -150,6 +150,7 @@ class _Search:
         return min(int(np.searchsorted(cum, self.rng.random() * cum[-1], side="right")), len(cum) - 1)
 
     def reward(self, kind: str, op: int, score: float) -> None:
+        """Blend an iteration's score into the weight of the operator it used."""
         w = self.weights[kind]
         w[op] = max(MIN_WEIGHT, (1.0 - self.s.reaction) * w[op] + self.s.reaction * score)
 
@@ -159,9 +160,9 @@ class _Search:
         n = p.n_clusters
         iterations, patience = self.s.iterations_for(n), self.s.patience_for(n)
         done = best_at = 0
-        if n < 4 or timed_out:  # a cycle of 3 clusters is fixed by its heads: the DP solved it
-            return best, best_cost, {"iterations": 0, "trials": 0}, timed_out
-        for _trial in range(self.s.trials):
+        # A cycle of at most 3 clusters is fixed by its heads: the local search's DP solved it.
+        trials = self.s.trials if n >= 4 and not timed_out else 0
+        for _trial in range(trials):
             cur, cur_cost = best, best_cost
             trial_best, since = best_cost, 0
             mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)]))
