@@ -234,7 +234,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
     )
     if args.report_only:
-        print(f"wrote {write_report(config.out_dir, config)}", file=sys.stderr)
+        if not any(config.out_dir.glob("*.csv")):
+            raise InputError(f"{config.out_dir}: no experiment CSV files to report on; run bench first")
+        print(f"wrote {write_report(config.out_dir, config.checkpoint_dir)}", file=sys.stderr)
         return 0
     run_bench(config)
     return 0

@@ -193,13 +193,16 @@ def run_jobs(
         for w in workers:
             w.job = None
 
+    def dispatch(w: _Worker) -> None:
+        if w.ready and w.job is None and pending:
+            w.job, msg = pending.popleft()
+            w.started = time.monotonic()
+            w.conn.send(msg)
+
     try:
         while workers and (pending or any(w.job is not None for w in workers)):
             for w in workers:
-                if w.ready and w.job is None and pending:
-                    w.job, msg = pending.popleft()
-                    w.started = time.monotonic()
-                    w.conn.send(msg)
+                dispatch(w)
             wait([w.conn for w in workers], timeout=0.5)
             now = time.monotonic()
             for w in list(workers):
@@ -226,6 +229,7 @@ def run_jobs(
                     if math.isfinite(payload.get("runtime_s", math.nan)):
                         stats.solver_s += payload["runtime_s"]
                     job, w.job = w.job, None
+                    dispatch(w)  # the next solve runs while the result is logged
                     on_result(job, payload, True)
                     continue
                 _stop_worker(w, kill=True)  # unusable from here on

@@ -119,6 +119,25 @@ def _runtime_table(df: pd.DataFrame) -> pd.DataFrame:
     return table
 
 
+def _trajectory_table(df: pd.DataFrame) -> str:
+    """Each panel's access order per solver, and whether its order / heads are the optimum's."""
+    lines = ["| K | omega | solver | access order | energy / optimum | same order as optimum | "
+             "same heads |", "|---|---|---|---|---|---|---|"]
+    for (_, _), panel in df.sort_values(["K", "omega", "solver"]).groupby(["K", "omega"], sort=False):
+        ref = panel[panel["solver"] == panel["reference"]]
+        ref_order = parse_ints(ref["order"].iloc[0]) if len(ref) else []
+        ref_heads = parse_ints(ref["heads"].iloc[0]) if len(ref) else []
+        for row in panel.itertuples():
+            order, heads = parse_ints(row.order), parse_ints(row.heads)
+            text = " -> ".join(["b0", *(f"G{c + 1}" for c in order), "b0"]) if order else "-"
+            same_order = bool(order) and order in (ref_order, ref_order[::-1])
+            same_heads = bool(heads) and heads == ref_heads
+            lines.append(f"| {row.K} | {row.omega:g} | {row.solver} | {text} | "
+                         f"{_ratio_fmt(row.ratio)} | {'yes' if same_order else 'no'} | "
+                         f"{'yes' if same_heads else 'no'} |")
+    return "\n".join(lines)
+
+
 def report_blocks(
     out_dir: Path, checkpoint_dir: Path | None = None, jobs: int | None = None
 ) -> dict[str, str]:
@@ -164,14 +183,7 @@ def report_blocks(
                              + _md_table(_runtime_table(df), _secs, "K"))
     df = frames["trajectories"]
     if df is not None:
-        lines = ["| K | omega | solver | access order | energy / optimum | same tour as optimum |",
-                 "|---|---|---|---|---|---|"]
-        for row in df.sort_values(["K", "omega", "solver"]).itertuples():
-            order = " -> ".join(["b0", *(f"G{int(c) + 1}" for c in parse_ints(row.order)), "b0"]) \
-                if isinstance(row.order, str) and row.order else "-"
-            lines.append(f"| {row.K} | {row.omega:g} | {row.solver} | {order} | "
-                         f"{_ratio_fmt(row.ratio)} | {'yes' if row.same_tour_as_reference else 'no'} |")
-        blocks["trajectories"] = "\n".join(lines)
+        blocks["trajectories"] = _trajectory_table(df)
     logs = read_training_logs(checkpoint_dir) if checkpoint_dir else None
     if logs is not None:
         last = logs.groupby("model").tail(1).set_index("model")[list(TRAINING_COLUMNS)]

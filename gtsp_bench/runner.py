@@ -639,7 +639,7 @@ def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
         else:
             df = experiment_rows(config, exp, sets, records)
             fig = figure_for(config, exp, df, sets)
-        atomic_write_text(csv_path, df.to_csv(index=False))
+        atomic_write_text(csv_path, df.to_csv(index=False, float_format="%.10g"))
         _save(fig, png_path)
         summary.written += [csv_path, png_path]
     path = write_report(config.out_dir, config.checkpoint_dir, config.jobs)
