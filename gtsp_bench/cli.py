@@ -224,7 +224,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
-    from gtsp_bench.runner import make_config, run_bench, write_report
+    from gtsp_bench.report import write_report
+    from gtsp_bench.runner import make_config, run_bench
 
     config = make_config(
         experiments=args.experiments, ks=args.clusters, solvers=args.solvers,

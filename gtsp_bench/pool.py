@@ -42,6 +42,12 @@ def _one_line(e: BaseException) -> str:
     return (text.splitlines() or [text])[0][:300]
 
 
+def _plain(stats: Mapping[str, Any]) -> dict[str, Any]:
+    """Solver statistics made JSON-safe (numbers, strings, booleans, None; others as text)."""
+    return {str(k): v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
+            for k, v in stats.items()}
+
+
 def _limit_threads() -> None:
     torch = sys.modules.get("torch")
     if torch is not None and torch.get_num_threads() != 1:
@@ -73,7 +79,7 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
             "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
             "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
             "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
-            "note": "",
+            "note": "", "stats": _plain(res.stats),
         }
     out["task_wall_s"] = time.perf_counter() - start
     return out

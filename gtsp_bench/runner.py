@@ -82,8 +82,6 @@ DP_MAX_K = 12
 #: it is killed (solvers are expected to stop themselves at ``time_limit``).
 HARD_LIMIT_FACTOR = 2.0
 HARD_LIMIT_GRACE_S = 10.0
-#: Seconds a worker may take to import and build its solver.
-INIT_TIMEOUT_S = 300.0
 #: Columns of every solve experiment's CSV, in order.
 CSV_COLUMNS = (
     "experiment", "K", "N", "instance", "omega", "solver", "seed", "status", "objective",
@@ -91,6 +89,8 @@ CSV_COLUMNS = (
     "distance_m", "lower_bound", "runtime_s", "time_limit_s", "order", "heads",
     "same_tour_as_reference", "note",
 )
+
+
 # ---------------------------------------------------------------------- configuration
 def parse_ks(text: str) -> tuple[int, ...]:
     """Parse cluster counts: a range ``4..10``, a list ``4,7``, or a mix ``4,6..8``.

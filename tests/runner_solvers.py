@@ -43,10 +43,48 @@ class FixedTour:
         return Solution(order, heads, evaluate(instance, omega, order, heads).objective)
 
 
+class _GreedyAfterImport:
+    """Greedy, after importing ``module`` (a library that may not share a process with another)."""
+
+    module = ""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import importlib
+
+        from solvers.greedy import Greedy
+
+        lib = importlib.import_module(self.module)
+        sol = Greedy().solve(instance, omega)
+        stats = {"module": self.module}
+        if self.module == "torch":
+            stats["torch_threads"] = lib.get_num_threads()
+        return Solution(sol.order, sol.heads, sol.objective, sol.status, stats=stats)
+
+
+class UsesHighs(_GreedyAfterImport):
+    """Imports highspy."""
+
+    module = "highspy"
+
+
+class UsesOrtools(_GreedyAfterImport):
+    """Imports ortools' CP-SAT."""
+
+    module = "ortools.sat.python.cp_model"
+
+
+class UsesTorch(_GreedyAfterImport):
+    """Imports torch and reports its thread count."""
+
+    module = "torch"
+
+
 def register() -> None:
-    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, and t-missing (whose class
-    does not exist), all with ``bench=False``."""
+    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-highs, t-ortools, t-torch
+    and t-missing (whose class does not exist), all with ``bench=False``."""
     for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
-                      ("t-fixed", "FixedTour"), ("t-missing", "NoSuchClass")):
+                      ("t-fixed", "FixedTour"), ("t-highs", "UsesHighs"),
+                      ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),
+                      ("t-missing", "NoSuchClass")):
         register_solver(name, f"tests.runner_solvers:{cls}", "runner test solver", bench=False,
                         replace=True)

@@ -224,6 +224,22 @@ def test_failing_and_hanging_solvers_become_rows(tmp_path, monkeypatch):
     assert summary.failed == len(by["t-crash"]) + len(by["t-missing"])
 
 
+def test_highspy_ortools_torch_solvers_share_a_run(tmp_path):
+    """Solvers importing highspy, ortools and torch run in one bench (never in one process),
+    torch with one thread; a reference that is not optimal leaves every ratio empty, with a note."""
+    config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=1,
+                     solvers="t-highs,t-ortools,t-torch", reference="t-fixed")
+    run_bench(config, log=lambda m: None)
+    df = pd.read_csv(tmp_path / "out" / "ratio-k.csv")
+    assert set(df["solver"]) == {"t-highs", "t-ortools", "t-torch", "t-fixed"}
+    assert (df["status"] == "feasible").all(), df["note"].tolist()
+    assert df["ratio"].isna().all() and df["optimum"].isna().all()
+    assert df["note"].str.contains(r"reference t-fixed not optimal \(feasible\)").all()
+    stats = {json.loads(line)["solver"]: json.loads(line)["stats"] for line in _log_lines(config)}
+    assert stats["t-torch"] == {"module": "torch", "torch_threads": 1}
+    assert stats["t-highs"]["module"] == "highspy"
+
+
 def test_instance_sets_are_reused_and_checked(tmp_path, capsys):
     """Instance files are written once and re-read; a file with other generator settings is an
     error, a file with changed coordinates is used with a warning."""
