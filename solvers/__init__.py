@@ -23,3 +23,9 @@ register_solver("lns", "solvers.lns:Lns",
 register_solver("pyvrp", "solvers.pyvrp_peer:PyVRPPeer",
                 "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
                 bench=False)
+register_solver("milp", "solvers.milp:Milp",
+                "HiGHS MILP: lifted subtour cuts, pricing, own branch and cut (exact; the reference)",
+                bench=False)
+register_solver("gurobi", "solvers.gurobi:Gurobi",
+                "the milp model through gurobipy, lazy subtour rows (exact; optional extra)",
+                bench=False)

@@ -21,7 +21,7 @@ edge used twice).
 :func:`solve_exact` runs the method on any :class:`Backend` (a thin LP/MIP wrapper that knows
 nothing of the GTSP):
 
-1. an upper bound from :func:`solvers.order_search.search_tour`;
+1. an upper bound from the large neighbourhood search :class:`solvers.lns.Lns` (one trial);
 2. exact pruning of candidate heads;
 3. a root loop on the LP relaxation over a core of short edges: missing edges are priced in
    by reduced cost; subtour cuts are separated on the fractional solution (node-cluster rows by
@@ -46,10 +46,14 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
 from gtsp_bench.errors import InputError
-from gtsp_bench.problem import Problem
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
+from solvers.greedy import greedy_tour
 from solvers.heads import optimal_heads
-from solvers.order_search import search_tour
+from solvers.lns import Lns
+from solvers.local_search import anchor_node, improve
+from solvers.options import check_float, check_int
 from solvers.prune import prune_heads
 
 #: Values above this count as 1 in an integer solution.
@@ -71,10 +75,11 @@ class MipOptions:
     ----------
     prune
         Remove candidate heads by exact pair dominance first.
-    restarts
-        Perturbation rounds of the upper-bound heuristic.
+    lns_trials
+        Trials of the large neighbourhood search giving the first upper bound (0: the greedy
+        tour after local search only).
     root_rounds
-        Most rounds of the root LP loop (0: go straight to the MILP, all edges, no cuts).
+        Most rounds of the root LP loop (0: no root cuts, all edges).
     core_edges
         Edges per node in the first LP (its cheapest); the others are priced in as needed.
         0: all edges from the start.
@@ -86,7 +91,7 @@ class MipOptions:
     """
 
     prune: bool = True
-    restarts: int = 100
+    lns_trials: int = 1
     root_rounds: int = 200
     core_edges: int = 10
     abs_gap: float = 1e-6
@@ -96,13 +101,17 @@ class MipOptions:
         for name in ("prune", "verbose"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"{name} must be true or false, got {getattr(self, name)!r}")
-        for name in ("restarts", "root_rounds", "core_edges"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-                raise InputError(f"{name} must be an integer >= 0, got {v!r}")
-        gap = self.abs_gap
-        if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not 0 <= gap < math.inf:
-            raise InputError(f"abs_gap must be a finite number >= 0, got {gap!r}")
+        for name in ("lns_trials", "root_rounds", "core_edges"):
+            check_int(name, getattr(self, name), 0)
+        check_float("abs_gap", self.abs_gap, 0.0, math.inf, open_low=False)
+
+
+def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None) -> np.ndarray:
+    """A good tour: :class:`solvers.lns.Lns` with ``trials`` trials (0: greedy + local search)."""
+    if trials == 0:
+        return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
+    sol = Lns(trials=trials).solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
+    return problem.to_tour(sol.order, sol.heads)
 
 
 # ---------------------------------------------------------------------- model
@@ -476,7 +485,7 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
                 break
             handle[shared] = True
         k = len(inner)
-        if k % 2 == 0 or handle.all():
+        if k % 2 == 0 or handle.all() or len(np.unique(inner)) < k:  # teeth must be disjoint
             continue
         lhs = z[np.ix_(handle, handle)].sum() / 2 + z[inner, outer].sum()
         rhs = handle.sum() + (k - 1) / 2
@@ -949,6 +958,8 @@ def solve_exact(
         order, heads = problem.to_solution(tour)
         cost = problem.tour_cost(tour)
         stats["total_s"] = time.perf_counter() - start
+        # reduced-cost fixing drops solutions no better than the incumbent, so a bound above
+        # the incumbent's cost only says that it is optimal
         bound = None if lower == -math.inf else min(float(lower), cost)
         return Solution(order, heads, objective=cost, status=status, lower_bound=bound, stats=stats)
 
@@ -956,8 +967,8 @@ def solve_exact(
         tour, cost = optimal_heads(problem, list(range(problem.instance.n_clusters)))
         return result(tour, "optimal", cost)
     with _Timer(stats, "heuristic_s"):
-        tour, _ = search_tour(problem, restarts=options.restarts, seed=seed,
-                              deadline=None if time_limit is None else deadline)
+        tour = upper_bound_tour(problem, options.lns_trials, seed,
+                                None if time_limit is None else 0.25 * time_limit)
     with _Timer(stats, "prune_s"):
         kept = prune_heads(problem) if options.prune else problem.clusters
     search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
@@ -968,3 +979,41 @@ def solve_exact(
         else:
             search.branch_and_cut()
     return result(search.tour, "optimal" if search.proven else "time_limit", search.lb)
+
+
+class MipSolver:
+    """The exact MILP solver on one backend; subclasses name the backend (``milp``, ``gurobi``).
+
+    Parameters
+    ----------
+    prune
+        Remove dominated candidate heads first (exact).
+    lns_trials
+        Trials of the large neighbourhood search giving the first upper bound (0: greedy and
+        local search only).
+    root_rounds
+        Most rounds of the root LP loop (0: no root cuts).
+    core_edges
+        Cheapest edges per node in the first LP (0: all edges).
+    abs_gap
+        Absolute gap under which the optimum counts as proven.
+    verbose
+        Print the backend's log.
+    """
+
+    def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
+                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
+        self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
+                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
+
+    def backend(self, options: MipOptions) -> Backend:
+        """A new, empty backend."""
+        raise NotImplementedError
+
+    def solve(
+        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
+        seed: int = 0,
+    ) -> Solution:
+        """Solve to proven optimality, or return the best tour and bound at ``time_limit``."""
+        return solve_exact(price(instance, omega), self.backend, self.options,
+                           time_limit=time_limit, seed=seed)

@@ -16,10 +16,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from gtsp_bench.instance import Instance
-from gtsp_bench.problem import price
-from gtsp_bench.registry import Solution
-from solvers.gtsp_mip import LpResult, MipOptions, MipResult, solve_exact
+from solvers.gtsp_mip import LpResult, MipOptions, MipResult, MipSolver
 
 
 class HighsBackend:
@@ -128,34 +125,9 @@ class HighsBackend:
         raise RuntimeError(f"HiGHS stopped with status {h.modelStatusToString(status)}")
 
 
-class Milp:
-    """Exact GTSP by MILP with HiGHS: symmetric edge variables, lifted subtour cuts.
+class Milp(MipSolver):
+    """Exact GTSP by MILP with HiGHS (options: :class:`solvers.gtsp_mip.MipSolver`)."""
 
-    Parameters
-    ----------
-    prune
-        Remove dominated candidate heads first (exact).
-    restarts
-        Effort of the upper-bound heuristic.
-    root_rounds
-        Most rounds of the root LP loop (0: straight to the MILP).
-    core_edges
-        Cheapest edges per node in the first LP (0: all edges).
-    abs_gap
-        Absolute gap under which the optimum counts as proven.
-    verbose
-        Print HiGHS's log.
-    """
-
-    def __init__(self, prune: bool = True, restarts: int = 100, root_rounds: int = 200,
-                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
-        self.options = MipOptions(prune=prune, restarts=restarts, root_rounds=root_rounds,
-                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
-
-    def solve(
-        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
-    ) -> Solution:
-        """Solve to proven optimality, or return the best tour and bound at ``time_limit``."""
-        return solve_exact(price(instance, omega), HighsBackend, self.options,
-                           time_limit=time_limit, seed=seed)
+    def backend(self, options: MipOptions) -> HighsBackend:
+        """A new, empty HiGHS backend."""
+        return HighsBackend(options)
