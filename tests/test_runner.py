@@ -74,7 +74,7 @@ def test_reference_resolution():
     (["-K", "60"], "would cover"),
     (["--solvers", "greedy,magic"], "unknown solver 'magic' (valid: "),
     (["--experiments", "ratio-omega,speed"], "unknown experiment 'speed' (valid: "),
-    (["--reference", "gurobi"], "unknown reference solver 'gurobi'"),
+    (["--reference", "cplex"], "unknown reference solver 'cplex'"),
     (["--jobs", "0"], "jobs must be an integer >= 1"),
     (["--time-limit", "0"], "time limit must be > 0"),
     (["--instances", "0"], "number of instances must be an integer >= 1"),
