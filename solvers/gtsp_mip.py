@@ -64,6 +64,8 @@ _ZERO = 1e-9
 _FLOW_SCALE = 1_000_000
 #: A cut is added only when violated by more than this; a column priced in below -this.
 _TOL = 1e-6
+#: Columns priced into the root LP per round, per node.
+PRICE_PER_NODE = 2
 
 
 # ---------------------------------------------------------------------- options
@@ -310,13 +312,20 @@ class Cuts:
         inside = 0.5 * np.einsum("sn,sn->s", (xm @ s.T).T, s)
         return self.rhs - self._per_row(inside) - self.ycoef @ y
 
-    def dual_weights(self, model: GtspModel, duals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For row duals ``duals``: the dual weight on each edge and on each y column."""
+    def dual_weights(
+        self, model: GtspModel, duals: np.ndarray, edges: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """For row duals ``duals``: the dual weight on each of ``edges`` and on each y column."""
         nz = np.flatnonzero(np.abs(duals[self.row]) > 1e-12)
-        s = self.side[nz].astype(float)
-        pair = (s * duals[self.row[nz], None]).T @ s  # (n, n): duals of the sides holding i and j
         rows = np.flatnonzero(np.abs(duals) > 1e-12)
-        return pair[model.tail, model.head], duals[rows] @ self.ycoef[rows]
+        on_y = duals[rows] @ self.ycoef[rows]
+        s = self.side[nz]
+        if len(edges) * len(nz) < model.n_nodes**2 * 4:  # few edges: side by side
+            both = s[:, model.tail[edges]] & s[:, model.head[edges]]
+            return duals[self.row[nz]] @ both, on_y
+        sf = s.astype(float)
+        pair = (sf * duals[self.row[nz], None]).T @ sf  # (n, n): duals of the sides holding i, j
+        return pair[model.tail[edges], model.head[edges]], on_y
 
 
 def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int) -> Cuts:
@@ -639,15 +648,19 @@ class _Lp:
         out[self.cols] = values
         return out
 
-    def reduced_costs(self, duals: np.ndarray) -> np.ndarray:
-        """Reduced cost of every model column for the row duals of an LP solve."""
+    def reduced_costs(self, duals: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Reduced costs of model columns ``cols`` for the row duals of an LP solve."""
         model = self.model
         n, m = model.n_nodes, model.n_clusters
         pi_cluster, pi_deg, mu = duals[:m], duals[m:m + n], duals[m + n:]
-        on_edge, on_y = self.cuts.dual_weights(model, mu)
-        rc_y = model.cost[:n] - pi_cluster[model.cluster] + 2 * pi_deg - on_y
-        rc_x = model.cost[n:] - pi_deg[model.tail] - pi_deg[model.head] - on_edge
-        return np.concatenate([rc_y, rc_x])
+        is_y = cols < n
+        ys, es = cols[is_y], cols[~is_y] - n
+        on_edge, on_y = self.cuts.dual_weights(model, mu, es)
+        out = np.empty(len(cols))
+        out[is_y] = model.cost[ys] - pi_cluster[model.cluster[ys]] + 2 * pi_deg[ys] - on_y[ys]
+        out[~is_y] = (model.cost[n + es] - pi_deg[model.tail[es]] - pi_deg[model.head[es]]
+                      - on_edge)
+        return out
 
 
 def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np.ndarray:
@@ -698,6 +711,13 @@ class _Timer:
 
     def __exit__(self, *exc: object) -> None:
         self.stats[self.key] = self.stats.get(self.key, 0.0) + time.perf_counter() - self.start
+
+
+def _padded(fixes: np.ndarray, n: int) -> np.ndarray:
+    """Node column codes for ``n`` columns: columns added since the node was made are free."""
+    if len(fixes) == n:
+        return fixes
+    return np.concatenate([fixes, np.full(n - len(fixes), -1, dtype=np.int8)])
 
 
 @dataclass(order=True)
@@ -769,10 +789,12 @@ class _Search:
             if res.status == "infeasible" and absent.any():  # the core was too small
                 lp.add_cols(np.flatnonzero(absent))
                 continue
-            if res.values is None or res.duals is None:
+            if res.values is None or res.duals is None or res.reduced_costs is None:
                 break
             values = lp.full(res.values)
-            rc = lp.reduced_costs(res.duals)
+            rc = np.zeros(model.n_cols)
+            rc[lp.cols] = res.reduced_costs
+            rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
             self.lb = max(self.lb, bound)
             if self.proven:
@@ -782,33 +804,37 @@ class _Search:
                 self.fixed |= fix
                 lp.fix_zero(np.flatnonzero(fix[lp.cols]))
             price = np.flatnonzero(absent & ~fix & (rc < -_TOL))
-            if len(price):  # price columns in before separating
-                lp.add_cols(price[np.argsort(rc[price])[:max(100, model.n_nodes)]])
-                continue
-            history.append(res.objective)
-            if len(history) > 5 and history[-1] - history[-6] < 1e-5 * max(1.0, abs(history[-1])):
-                break  # tailing off
+            if len(price):  # the most negative columns join; cuts are separated meanwhile
+                lp.add_cols(price[np.argsort(rc[price])[:PRICE_PER_NODE * model.n_nodes]])
+            else:
+                history.append(res.objective)
+                if len(history) > 5 and history[-1] - history[-6] < 1e-5 * max(1.0, abs(history[-1])):
+                    break  # tailing off
             new = self.separate(values)
             if new is None:
-                if _is_integral(values):
-                    self.offer(values)  # the LP optimum is a tour: the optimum
-                break
+                if not len(price):
+                    if _is_integral(values):
+                        self.offer(values)  # the LP optimum is a tour: the optimum
+                    break
+                continue
             lp.purge(values, 3)
             lp.add_cuts(new)
         self.stats["root_rounds"], self.stats["root_bound"] = rounds, self.lb
         self.stats["root_cuts"] = len(lp.cuts)
-        # every column not fixed by reduced cost joins the LP: the search below is exact
-        present = np.zeros(model.n_cols, dtype=bool)
-        present[lp.cols] = True
-        missing = np.flatnonzero(~present & ~self.fixed)
-        if len(missing):
-            lp.add_cols(missing)
-        self.stats["search_cols"] = int(len(lp.cols) - self.fixed[lp.cols].sum())
+
+    def absent(self) -> np.ndarray:
+        """Model columns neither in the LP nor fixed to 0."""
+        absent = ~self.fixed
+        absent[self.lp.cols] = False
+        return np.flatnonzero(absent)
 
     # -------------------------------------------------------------- MILP by the backend
     def native_mip(self) -> None:
         """The backend's own branch and cut, subtour rows added lazily."""
         model, lp = self.model, self.lp
+        missing = self.absent()  # every column not fixed joins: the search is exact
+        if len(missing):
+            lp.add_cols(missing)
 
         def lazy(v: np.ndarray) -> tuple[sp.csr_array, np.ndarray] | None:
             cuts = subtour_cuts(model, lp.full(v))
@@ -829,12 +855,13 @@ class _Search:
     def branch_and_cut(self) -> None:
         """Branch and cut with the backend as LP solver: best first, diving into a child.
 
-        Each node runs the root's cut loop (without pricing), fixes columns by reduced cost for
-        its subtree, and branches on the fractional ``y`` closest to 1/2 (``y = 1`` fixes a
-        cluster's head), else on such an ``x``. Cuts are global; slack ones are purged.
+        Each node runs the root's cut loop; columns not in the LP are priced in while their
+        reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
+        fixes columns by reduced cost for its subtree and branches on the fractional ``y``
+        closest to 1/2 (``y = 1`` fixes a cluster's head), else on such an ``x``. Cuts are
+        global; slack ones are purged.
         """
         lp = self.lp
-        upper0 = np.where(self.fixed[lp.cols], 0.0, 1.0)
         heap: list[_Node] = []
         free = np.full(len(lp.cols), -1, dtype=np.int8)
         node: _Node | None = _Node(self.lb, 0, free)
@@ -842,12 +869,15 @@ class _Search:
         seq = explored = 0
         while node is not None and not self.proven and self.left() > 0:
             if node.bound <= self.ub - self.gap:
-                change = np.flatnonzero(node.fixes != applied)  # move the LP's bounds here
+                # move the LP's bounds here (columns priced in later are free in older nodes)
+                fixes, applied = _padded(node.fixes, len(lp.cols)), _padded(applied, len(lp.cols))
+                change = np.flatnonzero(fixes != applied)
                 if len(change):
-                    code = node.fixes[change]
+                    code = fixes[change]
+                    upper0 = np.where(self.fixed[lp.cols[change]], 0.0, 1.0)
                     lp.backend.set_bounds(change, np.maximum(code, 0).astype(float),
-                                          np.where(code < 0, upper0[change], code).astype(float))
-                applied = node.fixes
+                                          np.where(code < 0, upper0, code).astype(float))
+                applied = fixes
                 explored += 1
                 outcome = self._node_loop()
                 if outcome == "stopped":
@@ -856,7 +886,7 @@ class _Search:
                 node = None
                 if isinstance(outcome, tuple):
                     bound, col, value, fix = outcome
-                    base = applied.copy()
+                    base = _padded(applied, len(lp.cols))
                     base[fix] = 0
                     first, second = (1, 0) if value >= 0.5 else (0, 1)
                     children = []
@@ -884,14 +914,26 @@ class _Search:
         lp = self.lp
         history: list[float] = []
         while self.left() > 0:
-            res = self.solve_lp(cutoff=self.ub - self.gap)
+            absent = self.absent()
+            # with columns absent, only the Lagrangian bound (below) may prune: no LP cutoff
+            res = self.solve_lp(cutoff=self.ub - self.gap if len(absent) == 0 else math.inf)
             if res.status in ("infeasible", "cutoff"):
                 return None
-            if res.values is None or res.reduced_costs is None:
+            if res.values is None or res.reduced_costs is None or res.duals is None:
                 return "stopped"
+            values = lp.full(res.values)
+            if len(absent):
+                rc = lp.reduced_costs(res.duals, absent)
+                if res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap:
+                    return None
+                price = rc < -_TOL
+                if price.any():
+                    if _is_integral(values) and subtour_cuts(self.model, values) is None:
+                        self.offer(values)
+                    lp.add_cols(absent[price][np.argsort(rc[price])[:PRICE_PER_NODE * self.model.n_nodes]])
+                    continue
             if res.objective > self.ub - self.gap:
                 return None
-            values = lp.full(res.values)
             history.append(res.objective)
             tailing = len(history) > 3 and history[-1] - history[-4] < 1e-4 * max(1.0, abs(history[-1]))
             new = None if tailing and not _is_integral(values) else self.separate(values, False)
@@ -978,7 +1020,11 @@ def solve_exact(
             search.native_mip()
         else:
             search.branch_and_cut()
-    return result(search.tour, "optimal" if search.proven else "time_limit", search.lb)
+    stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
+    lower = search.lb
+    if search.model.integral_costs and math.isfinite(lower):
+        lower = math.ceil(lower - 1e-6)  # every tour costs an integer
+    return result(search.tour, "optimal" if search.proven else "time_limit", lower)
 
 
 class MipSolver:

@@ -71,6 +71,10 @@ class HighsBackend:
         self.h.changeColsBounds(len(cols), np.asarray(cols, dtype=np.int32),
                                 np.asarray(lower, float), np.asarray(upper, float))
 
+    def _set_time_limit(self, seconds: float) -> None:
+        # HiGHS compares time_limit with the object's run time summed over all its runs
+        self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
+
     def _set_integral(self, integral: bool, cols: np.ndarray | None = None) -> None:
         self._integral = integral
         cols = np.arange(self.n_cols) if cols is None else cols
@@ -82,7 +86,7 @@ class HighsBackend:
         """Solve the LP relaxation (from the previous basis)."""
         if self._integral:
             self._set_integral(False)
-        self.h.setOptionValue("time_limit", float(time_limit))
+        self._set_time_limit(time_limit)
         self.h.setOptionValue("objective_bound", float(cutoff))
         self.h.run()
         status = self.h.getModelStatus()
@@ -105,7 +109,7 @@ class HighsBackend:
         h = self.h
         if not self._integral:
             self._set_integral(True)
-        h.setOptionValue("time_limit", float(time_limit))
+        self._set_time_limit(time_limit)
         h.setOptionValue("objective_bound", float(cutoff))
         h.setOptionValue("mip_rel_gap", 0.0)
         h.setOptionValue("mip_abs_gap", float(gap))

@@ -1,0 +1,69 @@
+"""Pair-dominance pruning: never removes every optimal tour, and it does prune."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
+from gtsp_bench.registry import run_solver
+from solvers.prune import prune_heads
+
+
+def best_over(problem: Problem, kept: tuple[np.ndarray, ...]) -> float:
+    """The cheapest tour using only ``kept`` nodes (plain enumeration)."""
+    best = np.inf
+    for heads in itertools.product(*kept):
+        for perm in itertools.permutations(range(1, len(kept))):
+            best = min(best, problem.tour_cost([heads[0], *(heads[p] for p in perm)]))
+    return best
+
+
+def _instance(seed: int, depot: bool, grid: bool) -> tuple[Instance, float | None]:
+    """K = 2..5 clusters of 1..4 nodes; ``grid``: integer EUC_2D points on a small grid (ties)."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(2, 6))
+    sizes = rng.integers(1, 5, size=k)
+    if grid:
+        clusters = tuple(rng.integers(0, 6, size=(s, 2)).astype(float) for s in sizes)
+        return Instance(name=f"grid{seed}", clusters=clusters, params=None,
+                        edge_weight_type="EUC_2D"), None
+    base = generate_instance(k, 4, seed=seed)
+    inst = Instance(name=f"uav{seed}", depot=base.depot if depot else None,
+                    clusters=tuple(c[:s] for c, s in zip(base.clusters, sizes, strict=True)))
+    return inst, float(rng.choice([0.0, 1.0, rng.uniform()]))
+
+
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("kind", ["depot", "no-depot", "grid"])
+def test_pruning_keeps_an_optimal_tour(seed, kind):
+    """The best tour over the kept nodes is the brute-force optimum (ties included)."""
+    inst, omega = _instance(seed, kind == "depot", kind == "grid")
+    problem = price(inst, omega)
+    kept = prune_heads(problem)
+    assert all(len(k) >= 1 for k in kept)
+    assert all(set(k) <= set(c) for k, c in zip(kept, problem.clusters, strict=True))
+    optimum = run_solver("brute", inst, omega).objective
+    assert best_over(problem, kept) == pytest.approx(optimum, rel=1e-12, abs=1e-9)
+
+
+def test_pruning_removes_dominated_heads_and_more_passes_prune_more():
+    """On a K = 8, N = 20 instance it removes nodes; one pass keeps a superset of the fixpoint."""
+    problem = price(generate_instance(8, 20, seed=3), 0.5)
+    full = prune_heads(problem)
+    once = prune_heads(problem, max_passes=1)
+    assert sum(len(k) for k in full) < problem.n_nodes - 1
+    assert all(set(f) <= set(o) for f, o in zip(full, once, strict=True))
+    assert len(full[-1]) == 1 and full[-1][0] == problem.depot
+
+
+def test_two_clusters_are_not_pruned():
+    """With fewer than three clusters a head's two neighbours are one node: nothing is pruned."""
+    inst = Instance(name="two", clusters=(np.array([[0.0, 0.0], [1.0, 0.0]]),
+                                          np.array([[5.0, 0.0], [9.0, 0.0]])), params=None)
+    problem = price(inst, None)
+    assert [len(k) for k in prune_heads(problem)] == [2, 2]
