@@ -1,0 +1,127 @@
+"""milp (HiGHS): agrees with brute force and dp, proves GTSPLIB optima, honours time limits."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
+from gtsp_bench.registry import get_solver, run_solver
+from solvers import gtsp_mip as gm
+from solvers.milp import HighsBackend, Milp
+
+from .conftest import GTSPLIB, REPO
+
+
+def _instance(seed: int, k: int, sizes: list[int], depot: bool) -> Instance:
+    base = generate_instance(k, max(sizes), seed=seed)
+    return Instance(name=f"p{seed}", depot=base.depot if depot else None,
+                    clusters=tuple(c[:s] for c, s in zip(base.clusters, sizes, strict=True)))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10**6), k=st.integers(1, 5), depot=st.booleans(),
+       omega=st.sampled_from([0.0, 0.5, 0.9, 1.0]), data=st.data())
+def test_milp_dp_and_brute_agree(seed, k, depot, omega, data):
+    """Random K = 1..5 (with and without a depot), clusters of 1..4 nodes, four omegas."""
+    sizes = data.draw(st.lists(st.integers(1, 4), min_size=k, max_size=k))
+    inst = _instance(seed, k, sizes, depot)
+    brute = run_solver("brute", inst, omega)
+    milp = run_solver("milp", inst, omega)
+    dp = run_solver("dp", inst, omega)
+    assert milp.status == "optimal"
+    assert milp.objective == pytest.approx(brute.objective, rel=1e-9, abs=1e-9)
+    assert dp.objective == pytest.approx(brute.objective, rel=1e-9, abs=1e-9)
+    assert milp.lower_bound <= milp.objective + 1e-9
+    assert milp.lower_bound >= milp.objective - 1.01e-6  # the default abs_gap
+
+
+@pytest.mark.parametrize("options", [
+    {"prune": False, "core_edges": 0},
+    {"root_rounds": 1, "lns_trials": 0, "core_edges": 1},  # the branch and cut does the work
+    {"root_rounds": 0, "prune": False, "lns_trials": 0},
+])
+@pytest.mark.parametrize("seed", range(4))
+def test_every_path_is_exact(options, seed):
+    """With pruning, pricing, root cuts or the upper bound switched off, still the optimum."""
+    inst = generate_instance(6, 3, seed=seed)
+    brute = run_solver("brute", inst, 0.3)
+    r = run_solver(Milp(**options), inst, 0.3)
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(brute.objective, rel=1e-9)
+
+
+def test_branch_and_cut_runs_and_agrees_with_dp():
+    """A K = 8 instance whose root LP is not integral: branching proves the dp optimum."""
+    inst = generate_instance(8, 6, seed=5)
+    r = run_solver(Milp(root_rounds=2, lns_trials=0), inst, 0.5)
+    assert r.stats["bc_nodes"] >= 1
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
+
+
+@pytest.mark.parametrize("name, best", [("11berlin52", 4040), ("20kroA100", 9711)])
+def test_proves_gtsplib_optima(name, best):
+    """The literature optima of the two smallest GTSPLIB samples, proven (integer bound)."""
+    r = run_solver("milp", read_instance(GTSPLIB / f"{name}.gtsp"), None)
+    assert r.status == "optimal"
+    assert r.objective == best
+    assert r.lower_bound == best
+
+
+def test_time_limit_gives_tour_and_bound():
+    """A K = 20 instance with 1 s: the best tour, a lower bound below it, status time_limit."""
+    inst = generate_instance(20, 20, seed=1)
+    r = run_solver("milp", inst, 0.5, time_limit=1.0)
+    assert r.status == "time_limit"
+    assert sorted(r.order) == list(range(20))
+    assert r.lower_bound is None or r.lower_bound <= r.objective
+    assert r.runtime_s < 5.0
+
+
+def test_reduced_costs_match_highs():
+    """The reduced costs computed from row duals (used for pricing) equal HiGHS's own."""
+    problem = price(generate_instance(6, 4, seed=2), 0.5)
+    model = gm.build_model(problem, problem.clusters)
+    tour = gm.upper_bound_tour(problem, 0, 0, None)  # its edges keep the core LP feasible
+    lp = gm._Lp(model, HighsBackend(gm.MipOptions()), gm.core_columns(model, 3, tour))
+    for _ in range(4):  # a few rounds with cuts
+        res = lp.backend.solve_lp(60.0)
+        assert res.status == "optimal"
+        ours = lp.reduced_costs(res.duals, lp.cols)
+        np.testing.assert_allclose(ours, res.reduced_costs, atol=1e-7)
+        cuts = gm.separate(model, lp.full(res.values))
+        if cuts is None:
+            break
+        lp.add_cuts(cuts)
+
+
+def test_bad_options_and_input_are_refused():
+    """Options are checked when the solver is built; an asymmetric matrix is refused."""
+    with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):
+        get_solver("milp", lns_trials=-2)
+    with pytest.raises(InputError, match="no option 'threads'"):
+        get_solver("milp", threads=2)
+    w = np.array([[0, 1, 2, 3], [5, 0, 1, 2], [2, 1, 0, 1], [3, 2, 1, 0]], dtype=float)
+    inst = Instance(name="asym", clusters=tuple(np.zeros((1, 2)) for _ in range(4)), params=None,
+                    edge_weight_type="EXPLICIT", weights=w)
+    with pytest.raises(InputError, match="not symmetric"):
+        run_solver("milp", inst, None)
+
+
+def test_importing_milp_does_not_import_highspy():
+    """highspy is imported when solving only (it cannot share a process with ortools)."""
+    code = ("import sys, solvers.milp, solvers.gurobi; "
+            "print('highspy' in sys.modules, 'gurobipy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
+                         check=True).stdout
+    assert out.split() == ["False", "False"]
