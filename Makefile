@@ -8,7 +8,7 @@ K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
 
-.PHONY: install test lint bench bench-quick bench-heuristics clean
+.PHONY: install test lint bench bench-quick bench-heuristics bench-exact clean
 
 install: $(STAMP)
 
@@ -35,6 +35,10 @@ bench-quick: $(STAMP)
 # Heuristics side by side (benchmarks/heuristics.py); QUICK=1 for a subset.
 bench-heuristics: $(STAMP)
 	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
+
+# Exact solvers side by side (benchmarks/exact.py); QUICK=1 for a subset.
+bench-exact: $(STAMP)
+	$(BIN)/python benchmarks/exact.py $(if $(QUICK),--quick)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -36,9 +36,7 @@ def import_gurobipy() -> Any:
 
 
 class GurobiBackend:
-    """A gurobipy model behind the :class:`solvers.gtsp_mip.Backend` protocol."""
-
-    lazy_constraints = True
+    """A gurobipy model behind the :class:`solvers.gtsp_mip.LazyMipBackend` protocol."""
 
     def __init__(self, options: MipOptions) -> None:
         gp = self.gp = import_gurobipy()

@@ -1,33 +1,29 @@
-"""``milp``: the GTSP MILP of :mod:`solvers.gtsp_mip` solved exactly with HiGHS (highspy).
+"""``milp``: the GTSP MILP of :mod:`solvers.gtsp_mip` solved exactly, with HiGHS as LP solver.
 
-highspy 1.15.1 has no working lazy-constraint callback, so subtour rows are added in the root LP
-loop and, when the MILP's solution still has subtours, by solving it again with their rows. The
-heuristic's tour value is passed as a cutoff (``objective_bound``), not as a MIP start (a start
-made HiGHS restart and run slower). ``mip_rel_gap`` is 0: "optimal" means proven.
+highspy 1.15.1 has no working lazy-constraint callback (it exists but never fires, and its input
+cannot add rows), and HiGHS's own MILP, re-solved after each solution with subtours, stalled on
+instances whose root gap stayed open. So HiGHS solves LPs only: the root loop and the branch and
+cut of :func:`solvers.gtsp_mip.solve_exact` add the cuts, price the columns and branch. "optimal"
+means proven to ``abs_gap`` (1e-6; with integer costs, to below 1).
 
-highspy is imported inside :meth:`Milp.solve` only (it cannot share a process with ortools).
+highspy is imported when a backend is built only (it cannot share a process with ortools).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 import numpy as np
 import scipy.sparse as sp
 
-from solvers.gtsp_mip import LpResult, MipOptions, MipResult, MipSolver
+from solvers.gtsp_mip import LpResult, MipOptions, MipSolver
 
 
 class HighsBackend:
     """A ``highspy.Highs`` object behind the :class:`solvers.gtsp_mip.Backend` protocol.
 
-    It has no lazy constraints: :func:`solvers.gtsp_mip.solve_exact` branches itself and uses
-    HiGHS as LP solver (HiGHS's own MIP, re-solved after each subtour solution, stalled on
-    instances whose root gap was not closed).
+    It is an LP solver only: highspy has no working lazy constraints, so
+    :func:`solvers.gtsp_mip.solve_exact` branches itself (HiGHS's own MILP, re-solved after each
+    subtour solution, stalled on instances whose root gap stayed open).
     """
-
-    lazy_constraints = False
 
     def __init__(self, options: MipOptions) -> None:
         import highspy
@@ -35,12 +31,6 @@ class HighsBackend:
         self._hs = highspy
         self.h = highspy.Highs()
         self.h.setOptionValue("output_flag", options.verbose)
-        self._integral = False
-
-    @property
-    def n_cols(self) -> int:
-        """Number of columns."""
-        return self.h.getNumCol()
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""
@@ -50,8 +40,6 @@ class HighsBackend:
         self.h.addCols(k, np.asarray(cost, float), np.zeros(k), np.ones(k), e.nnz,
                        e.indptr[:-1].astype(np.int32), e.indices.astype(np.int32),
                        e.data.astype(np.float64))
-        if self._integral:
-            self._set_integral(True, np.arange(self.n_cols - k, self.n_cols))
 
     def add_rows(self, matrix: sp.csr_array, lower: np.ndarray, upper: np.ndarray) -> None:
         """Append rows."""
@@ -75,17 +63,8 @@ class HighsBackend:
         # HiGHS compares time_limit with the object's run time summed over all its runs
         self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
 
-    def _set_integral(self, integral: bool, cols: np.ndarray | None = None) -> None:
-        self._integral = integral
-        cols = np.arange(self.n_cols) if cols is None else cols
-        kind = self._hs.HighsVarType.kInteger if integral else self._hs.HighsVarType.kContinuous
-        self.h.changeColsIntegrality(len(cols), cols.astype(np.int32),
-                                     np.full(len(cols), int(kind), dtype=np.uint8))
-
     def solve_lp(self, time_limit: float, cutoff: float = np.inf) -> LpResult:
         """Solve the LP relaxation (from the previous basis)."""
-        if self._integral:
-            self._set_integral(False)
         self._set_time_limit(time_limit)
         self.h.setOptionValue("objective_bound", float(cutoff))
         self.h.run()
@@ -99,34 +78,6 @@ class HighsBackend:
         sol = self.h.getSolution()
         return LpResult("optimal", self.h.getInfo().objective_function_value,
                         np.array(sol.col_value), np.array(sol.row_dual), np.array(sol.col_dual))
-
-    def solve_mip(
-        self, time_limit: float, cutoff: float, gap: float,
-        lazy: Callable[[np.ndarray], Any],
-    ) -> MipResult:
-        """Solve the MILP below ``cutoff`` (``lazy`` is not used: no lazy constraints)."""
-        status_of = self._hs.HighsModelStatus
-        h = self.h
-        if not self._integral:
-            self._set_integral(True)
-        self._set_time_limit(time_limit)
-        h.setOptionValue("objective_bound", float(cutoff))
-        h.setOptionValue("mip_rel_gap", 0.0)
-        h.setOptionValue("mip_abs_gap", float(gap))
-        h.run()
-        status = h.getModelStatus()
-        info = h.getInfo()
-        stats: dict[str, Any] = {"mip_nodes": int(info.mip_node_count)}
-        values = None
-        if info.primal_solution_status == 2:  # kSolutionStatusFeasible
-            values = np.array(h.getSolution().col_value)
-        if status == status_of.kOptimal:
-            return MipResult(values, info.mip_dual_bound, True, stats)
-        if status == status_of.kInfeasible:  # nothing below the cutoff
-            return MipResult(None, cutoff, True, stats)
-        if status in (status_of.kTimeLimit, status_of.kInterrupt):
-            return MipResult(values, info.mip_dual_bound, False, stats)
-        raise RuntimeError(f"HiGHS stopped with status {h.modelStatusToString(status)}")
 
 
 class Milp(MipSolver):
