@@ -1035,7 +1035,7 @@ def solve_exact(
     stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
     lower = search.lb
     if search.model.integral_costs and math.isfinite(lower):
-        lower = math.ceil(lower - 1e-6)  # every tour costs an integer
+        lower = math.ceil(lower - 1e-7)  # every tour costs an integer
     return result(search.tour, "optimal" if search.proven else "time_limit", lower)
 
 
