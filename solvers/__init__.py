@@ -10,3 +10,9 @@ register_solver("greedy", "solvers.greedy:Greedy",
                 "paper's greedy: next (cluster, head) with the least added weighted energy")
 register_solver("brute", "solvers.brute:Brute",
                 "exhaustive search over orders and heads (exact; tiny instances only)", bench=False)
+register_solver("drl", "solvers.drl:DRL",
+                "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule")
+register_solver("drl-sample", "solvers.drl:DRLSample",
+                "paper's policy: best of the greedy and 64 sampled tours", bench=False)
+register_solver("am", "solvers.am:AM",
+                "attention model, best of K greedy POMO starts, optimal heads for the order")
