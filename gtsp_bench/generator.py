@@ -113,6 +113,9 @@ def generate_instance(
 ) -> Instance:
     """One seeded UAV instance; the same arguments always give the same instance.
 
+    Coordinates are rounded to the millimetre so that instance files stay small and round-trip
+    exactly.
+
     Parameters
     ----------
     n_clusters, n_nodes
@@ -127,7 +130,7 @@ def generate_instance(
         Instance name; by default ``uav-K{K}-N{N}-s{seed}``.
     """
     rng = np.random.default_rng(seed)
-    coords = generate_batch(rng, 1, n_clusters, n_nodes, zeta, area)[0]
+    coords = np.round(generate_batch(rng, 1, n_clusters, n_nodes, zeta, area)[0], 3)
     seed_text = "-".join(str(s) for s in np.atleast_1d(seed))
     return Instance(
         name=name or f"uav-K{n_clusters}-N{n_nodes}-s{seed_text}",

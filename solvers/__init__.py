@@ -10,6 +10,9 @@ register_solver("greedy", "solvers.greedy:Greedy",
                 "paper's greedy: next (cluster, head) with the least added weighted energy")
 register_solver("brute", "solvers.brute:Brute",
                 "exhaustive search over orders and heads (exact; tiny instances only)", bench=False)
+register_solver("dp", "solvers.dp:DynamicProgramming",
+                "Held-Karp DP over (visited clusters, last node): exact, fast up to K ~ 12",
+                bench=False)
 register_solver("drl", "solvers.drl:DRL",
                 "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule")
 register_solver("drl-sample", "solvers.drl:DRLSample",
