@@ -146,6 +146,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=_int, default=1, help="torch threads (default: 1)")
     p.add_argument("--max-time", type=_float, default=None, metavar="S",
                    help="stop after S seconds of training wall time")
+    p.add_argument("--keep", choices=("best", "last"), default="best",
+                   help="policy kept in CKPT: best validation energy or the last (default: best)")
     p.add_argument("--resume", action="store_true", help="continue from CKPT.state.pt")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("-o", "--output", required=True, metavar="CKPT.pt", help="policy file to write")
@@ -213,15 +215,15 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
-    from solvers.train import TrainConfig, train
-
     import math
+
+    from solvers.train import TrainConfig, train
 
     cfg = TrainConfig(model=args.model, clusters=args.clusters, nodes=args.nodes,
                       steps=args.steps, batch=args.batch, lr=args.lr, seed=args.seed,
                       omega=args.omega, heads=args.heads, val_every=args.val_every,
                       val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
-                      threads=args.threads, max_time=args.max_time)
+                      threads=args.threads, max_time=args.max_time, keep=args.keep)
     meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
           f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)

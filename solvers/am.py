@@ -19,7 +19,7 @@ from typing import Any
 import torch
 from torch import nn
 
-from solvers.rl_common import EnvBatch, LearnedSolver, element_features, mask_logits, pick
+from solvers.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, element_features, mask_logits, pick
 
 
 class AttentionPolicy(nn.Module):
@@ -35,12 +35,17 @@ class AttentionPolicy(nn.Module):
         Encoder layers.
     ff
         Width of the encoder's feed-forward layers.
+    local
+        Add a learned bias f(d(last, j), d(j, depot)) of centroid distances to the logits: a
+        nearest-neighbour-like prior that does not depend on K (it helps K-generalisation).
     """
 
-    def __init__(self, dim: int = 128, n_heads: int = 8, n_layers: int = 3, ff: int = 512) -> None:
+    def __init__(self, dim: int = 128, n_heads: int = 8, n_layers: int = 3, ff: int = 512,
+                 local: bool = True) -> None:
         super().__init__()
         self.config: dict[str, Any] = {"model": "am", "dim": dim, "n_heads": n_heads,
-                                       "n_layers": n_layers, "ff": ff}
+                                       "n_layers": n_layers, "ff": ff, "local": local}
+        self.local = nn.Sequential(nn.Linear(3, 32), nn.ReLU(), nn.Linear(32, 1)) if local else None
         self.n_heads = n_heads
         self.node = nn.Sequential(nn.Linear(4, dim), nn.ReLU(), nn.Linear(dim, dim))
         self.pool = nn.Linear(2 * dim, dim)
@@ -59,6 +64,12 @@ class AttentionPolicy(nn.Module):
         clusters = self.pool(torch.cat([hn.mean(2), hn.max(2).values], dim=-1))
         return self.encoder(torch.cat([self.depot(depot)[:, None], clusters], dim=1))
 
+    @staticmethod
+    def _centroid_distances(env: EnvBatch) -> torch.Tensor:
+        """``(B, K + 1, K + 1)`` distances between the depot and cluster centroids (unit square)."""
+        pts = torch.cat([env.depot[:, None], env.coords.mean(2)], dim=1) / AREA_SCALE
+        return (pts[:, :, None] - pts[:, None, :]).pow(2).sum(-1).sqrt().float()
+
     def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
                ) -> tuple[torch.Tensor, torch.Tensor]:
         """Decode K tours per instance, the t-th starting at cluster t (POMO).
@@ -72,6 +83,7 @@ class AttentionPolicy(nn.Module):
         """
         h = self.encode(env)
         b, m, d = h.shape
+        dist = self._centroid_distances(env) if self.local is not None else None
         k = m - 1
         r = b * k
         h = h.repeat_interleave(k, dim=0)  # (R, M, D)
@@ -94,6 +106,11 @@ class AttentionPolicy(nn.Module):
             compat = compat.masked_fill(visited[:, None, None, :], -math.inf)
             glimpse = (torch.softmax(compat, -1) @ vg).reshape(r, d)
             logits = (self.project_out(glimpse)[:, None, :] * kl).sum(-1) / math.sqrt(d)
+            if dist is not None:
+                inst = rows // k
+                w = env.omega[inst].float()[:, None].expand(r, m)
+                feats = torch.stack([dist[inst, act], dist[inst, 0], w], dim=-1)  # (R, M, 3)
+                logits = logits + self.local(feats).squeeze(-1)
             logits = mask_logits(logits, visited)
             logprob = torch.log_softmax(logits, -1)
             act = pick(logits, mode, generator)

@@ -7,7 +7,8 @@ Data are drawn fresh each step from :func:`gtsp_bench.generator.generate_batch`,
 
 Given ``-o CKPT`` (e.g. ``drl.pt``), training writes, atomically:
 
-* ``CKPT``: the policy with the best validation energy so far (config + state_dict);
+* ``CKPT``: the policy with the best validation energy so far (``--keep best``, the default) or
+  the latest validated one (``--keep last``), as config + state_dict;
 * ``CKPT.json`` (``drl.json``): command, seed, steps, wall time, validation score, config;
 * ``CKPT.train.csv`` (``drl.train.csv``): the log, columns ``step,loss,reward,val_energy,wall_s``
   then ``val_gap_pct,critic_loss``; ``loss`` is the actor's loss, ``reward`` the mean -E (J) of
@@ -76,6 +77,7 @@ class TrainConfig:
     threads: int = 1
     max_time: float | None = None
     grad_clip: float = 1.0
+    keep: str = "best"
     model_options: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -96,6 +98,8 @@ class TrainConfig:
             raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {self.heads!r}")
         if self.max_time is not None and not self.max_time > 0:
             raise InputError(f"max time must be > 0 seconds, got {self.max_time!r}")
+        if self.keep not in ("best", "last"):
+            raise InputError(f"keep must be 'best' or 'last', got {self.keep!r}")
         if self.val_every % self.log_every:
             raise InputError("val_every must be a multiple of log_every")
 
@@ -109,7 +113,7 @@ class TrainConfig:
         parts = ["gtsp-bench train", f"--model {self.model}", f"--clusters {self.clusters}",
                  f"--nodes {self.nodes}", f"--steps {self.steps}", f"--batch {self.batch}",
                  f"--lr {self.lr:g}", f"--seed {self.seed}", f"--heads {self.head_rule}",
-                 f"--threads {self.threads}"]
+                 f"--threads {self.threads}", f"--keep {self.keep}"]
         if self.omega is not None:
             parts.append(f"--omega {self.omega:g}")
         if self.max_time is not None:
@@ -119,7 +123,7 @@ class TrainConfig:
     def identity(self) -> dict[str, Any]:
         """Settings that a resumed run must share with the run it continues."""
         d = dataclasses.asdict(self)
-        for k in ("steps", "max_time", "threads"):
+        for k in ("steps", "max_time", "threads", "keep"):
             d.pop(k)
         return d
 
@@ -348,7 +352,7 @@ class Trainer:
             self.rows.append(row)
 
     def _record_best(self, val_energy: float, gap: float | None) -> None:
-        if val_energy < self.best:
+        if val_energy < self.best or self.cfg.keep == "last":
             self.best, self.best_step = val_energy, self.step
             save_policy(self.model, self.paths["policy"])
             self._write_meta(val_energy, gap)

@@ -11,6 +11,7 @@ from gtsp_bench.energy import evaluate, evaluate_batch  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
 from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
 from gtsp_bench.instance import Instance  # noqa: E402
+from gtsp_bench.problem import price  # noqa: E402
 from gtsp_bench.registry import run_solver  # noqa: E402
 from solvers.drl import PointerPolicy  # noqa: E402
 from solvers.heads import optimal_heads  # noqa: E402
@@ -54,7 +55,10 @@ def test_heads_match_the_numpy_rules():
     k, n = 4, 5
     instances = [generate_instance(k, n, seed=i) for i in range(8)]
     omegas = rng.uniform(0, 1, 8)
-    env, problems = env_from_instances(instances, omegas)
+    env = env_from_instances(instances, omegas)
+    problems = [price(inst, w) for inst, w in zip(instances, omegas, strict=True)]
+    for i, problem in enumerate(problems):  # node costs are price()'s
+        np.testing.assert_allclose(env.node_cost[i].numpy().ravel(), problem.node_cost[:-1], rtol=1e-12)
     order = _random_orders(rng, 8, k)
     heads, cost = optimal_heads_batch(env, order)
     paper = paper_heads(env, order)
@@ -73,7 +77,7 @@ def test_heads_match_the_numpy_rules():
 def test_exact_enumeration_matches_brute_force():
     """The enumerated optimum equals the brute-force solver on tiny instances."""
     instances = [generate_instance(3, 3, seed=i) for i in range(4)]
-    env, _ = env_from_instances(instances, [0.2, 0.5, 0.7, 1.0])
+    env = env_from_instances(instances, [0.2, 0.5, 0.7, 1.0])
     opt = exact_by_enumeration(env, chunk=7)
     for i, inst in enumerate(instances):
         brute = run_solver("brute", inst, [0.2, 0.5, 0.7, 1.0][i]).objective
@@ -85,7 +89,7 @@ def test_unequal_clusters_are_padded_without_changing_the_optimum():
     clusters = (np.array([[100.0, 100.0], [120.0, 90.0], [90.0, 130.0]]),
                 np.array([[700.0, 500.0]]), np.array([[300.0, 800.0], [320.0, 780.0]]))
     inst = Instance("uneven", clusters, depot=np.array([500.0, 0.0]))
-    env, _ = env_from_instances([inst], [0.4])
+    env = env_from_instances([inst], [0.4])
     assert env.shape == (1, 3, 3)
     assert exact_by_enumeration(env)[0].item() == pytest.approx(run_solver("brute", inst, 0.4).objective)
 
