@@ -126,7 +126,7 @@ class AM(LearnedSolver):
 
     Default checkpoint: ``solvers/checkpoints/am.pt``. Options: ``checkpoint``, ``heads``
     (``optimal`` | ``paper``), ``samples`` (extra sampled tours per start, default 0),
-    ``threads``.
+    ``augment`` (also decode the mirrored instance, default false), ``threads``.
     """
 
     model_name = "am"

@@ -177,6 +177,13 @@ def env_from_instances(instances: Sequence[Instance], omegas: Sequence[float]) -
                     t(np.stack(ground)), t(np.array(edge)))
 
 
+def mirror(env: EnvBatch) -> EnvBatch:
+    """The batch mirrored about the vertical line through each depot: every cost is unchanged."""
+    coords = env.coords.clone()
+    coords[..., 0] = 2 * env.depot[:, None, None, 0] - coords[..., 0]
+    return dataclasses.replace(env, coords=coords)
+
+
 def _rows(b: int) -> torch.Tensor:
     return torch.arange(b)[:, None]
 
@@ -396,13 +403,16 @@ class LearnedSolver:
         Sampled tours per instance in addition to the greedy ones (0: greedy only).
     threads
         torch threads for inference.
+    augment
+        Also decode the mirror image of each instance (x -> 2 x_depot - x; same costs) and keep
+        the better tour.
     """
 
     model_name = ""
     default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 0,
-                 threads: int = 1) -> None:
+                 threads: int = 1, augment: bool = False) -> None:
         heads = heads or self.default_heads
         if heads not in HEAD_RULES:
             raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {heads!r}")
@@ -413,7 +423,10 @@ class LearnedSolver:
         self.checkpoint = Path(checkpoint) if checkpoint else CHECKPOINT_DIR / f"{self.model_name}.pt"
         self.heads = heads
         self.samples = samples
+        if not isinstance(augment, bool):
+            raise InputError(f"augment must be true or false, got {augment!r}")
         self.threads = threads
+        self.augment = augment
         self._model: nn.Module | None = None
 
     @property
@@ -426,7 +439,8 @@ class LearnedSolver:
     def candidates(self, env: EnvBatch, generator: torch.Generator) -> torch.Tensor:
         """``(B, R, K)`` candidate orders per instance (greedy first, then samples)."""
         b, _, _ = env.shape
-        orders = [self.model.decode(env, "greedy")[0].view(b, -1, env.shape[1])]
+        views = [env, mirror(env)] if self.augment else [env]
+        orders = [self.model.decode(v, "greedy")[0].view(b, -1, env.shape[1]) for v in views]
         if self.samples:
             rep = env.repeat(self.samples)
             sampled, _ = self.model.decode(rep, "sample", generator=generator)

@@ -42,6 +42,8 @@ def test_am_solver_takes_any_cluster_size(tmp_path):
         result = run_solver(get_solver("am", checkpoint=str(path), heads=heads), inst, 0.6)
         assert sorted(result.order) == list(range(5))
         assert all(h < 3 + c for c, h in enumerate(result.heads))
+        both = run_solver(get_solver("am", checkpoint=str(path), heads=heads, augment=True), inst, 0.6)
+        assert both.objective <= result.objective + 1e-9  # the plain tours are among the candidates
 
 
 def test_shipped_am_checkpoint_solves():

@@ -20,6 +20,7 @@ from solvers.rl_common import (  # noqa: E402
     exact_by_enumeration,
     load_policy,
     make_env,
+    mirror,
     optimal_heads_batch,
     paper_heads,
     save_policy,
@@ -47,6 +48,17 @@ def test_torch_reward_equals_numpy_evaluator():
         inst = Instance(f"i{i}", tuple(coords[i]), depot=np.array([500.0, 0.0]))
         ev = evaluate(inst, omega[i], order[i].tolist(), heads[i].tolist())
         assert got[i] == pytest.approx(ev.objective, rel=1e-12)
+
+
+def test_mirror_keeps_every_cost():
+    """The mirrored batch prices every tour exactly as the original (augmentation is safe)."""
+    rng = np.random.default_rng(8)
+    env = make_env(generate_batch(rng, 16, 4, 5), rng.uniform(0, 1, 16))
+    order = _random_orders(rng, 16, 4)
+    heads = torch.from_numpy(rng.integers(0, 5, (16, 4)))
+    flipped = mirror(env)
+    assert not torch.equal(flipped.coords, env.coords)
+    torch.testing.assert_close(tour_cost(flipped, order, heads), tour_cost(env, order, heads))
 
 
 def test_heads_match_the_numpy_rules():
