@@ -3,8 +3,10 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# Clusters for `make bench` (a range 4..10 or a list 4,7).
+# Clusters for `make bench` (a range 4..10 or a list 4,7); the paper's K = 4..10 by default.
 K      ?= 4..10
+# More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
+BENCH_ARGS ?=
 
 .PHONY: install test lint bench bench-quick clean
 
@@ -23,8 +25,12 @@ test: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
+# `python -m` runs this checkout's code whichever checkout the venv was installed from.
 bench: $(STAMP)
-	$(BIN)/gtsp-bench solvers
+	$(BIN)/python -m gtsp_bench.cli bench -K $(K) $(BENCH_ARGS)
+
+bench-quick: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench --quick $(BENCH_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -29,6 +29,7 @@ examples:
   gtsp-bench evaluate k7.json --solution sol.json --omega 0.3
   gtsp-bench solve ../shared/gtsplib/11berlin52.gtsp --solver greedy
   gtsp-bench solvers
+  gtsp-bench bench -K 4..10
 """
 
 
@@ -153,6 +154,41 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="CKPT.pt", help="policy file to write")
     p.set_defaults(handler=_cmd_train)
 
+    p = sub.add_parser("bench", help="regenerate the paper's tables and figures (CSV, PNG)",
+                       description="Run the paper's experiments (ratio-omega, ratio-k, runtime, "
+                       "trajectories, training) over seeded instance sets in parallel; write "
+                       "OUT/<experiment>.csv and .png and refresh OUT/README.md. Finished solves "
+                       "are logged in OUT/tmp/runs.jsonl, so an interrupted run resumes.")
+    p.add_argument("--experiments", "-e", default="all", metavar="LIST",
+                   help="comma-separated experiments, or 'all' (default)")
+    p.add_argument("--clusters", "-K", metavar="K",
+                   help="cluster counts: a range 4..10 or a list 4,7 (default: 4..10; quick: 4,5)")
+    p.add_argument("--solvers", "-s", metavar="LIST",
+                   help="comma-separated solvers (default: every registered benchmark solver)")
+    p.add_argument("--reference", metavar="NAME", default="auto",
+                   help="exact solver giving the optimum (default: dp up to K=12, else milp)")
+    p.add_argument("--instances", type=_int, metavar="N",
+                   help="instances per K (default: 30; quick: 3)")
+    p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N",
+                   help="nodes per cluster (default: 20)")
+    p.add_argument("--seed", type=_int, default=1, help="instance-set seed (default: 1)")
+    p.add_argument("--time-limit", "-t", type=_float, default=10.0, metavar="S",
+                   help="per-solve time limit in seconds (default: 10)")
+    p.add_argument("--jobs", "-j", type=_int, metavar="J",
+                   help="worker processes (default: the number of cores)")
+    p.add_argument("--quick", action="store_true",
+                   help="few instances and small K, written to results/quick (a smoke run)")
+    p.add_argument("--out", "-o", metavar="DIR", help="output folder (default: results)")
+    p.add_argument("--instance-dir", default="instances", metavar="DIR",
+                   help="where instance sets are kept (default: instances)")
+    p.add_argument("--checkpoints", default="solvers/checkpoints", metavar="DIR",
+                   help="where <model>.train.csv training logs are (default: solvers/checkpoints)")
+    p.add_argument("--fresh", action="store_true", help="redo solves already in the task log")
+    p.add_argument("--report-only", action="store_true",
+                   help="only refresh OUT/README.md from the CSV files")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_cmd_bench)
+
     p = sub.add_parser("solvers", help="list the registered solvers",
                        description="List the registered solvers, one line each.")
     p.set_defaults(handler=_cmd_solvers)
@@ -227,6 +263,29 @@ def _cmd_train(args: argparse.Namespace) -> int:
     meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
           f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)
+    return 0
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from gtsp_bench.report import write_report
+    from gtsp_bench.runner import make_config, run_bench
+
+    config = make_config(
+        experiments=args.experiments, ks=args.clusters, solvers=args.solvers,
+        reference=args.reference, n_instances=args.instances, n_nodes=args.nodes, seed=args.seed,
+        time_limit=args.time_limit, jobs=args.jobs, quick=args.quick, out_dir=args.out,
+        instance_dir=args.instance_dir, checkpoint_dir=args.checkpoints, fresh=args.fresh,
+        progress=not args.no_progress,
+    )
+    if args.report_only:
+        if not any(config.out_dir.glob("*.csv")):
+            raise InputError(f"{config.out_dir}: no experiment CSV files to report on; run bench first")
+        print(f"wrote {write_report(config.out_dir, config.checkpoint_dir)}", file=sys.stderr)
+        return 0
+    run_bench(config)
     return 0
 
 

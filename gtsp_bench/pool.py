@@ -1,0 +1,260 @@
+"""Worker processes for the runner: one solver per process, fresh interpreters, hard time limits.
+
+Each worker is a new Python interpreter (``subprocess``) talking to the runner over a socket pair
+wrapped in a :class:`multiprocessing.connection.Connection`. It imports only this module, the
+harness and its one solver, never the caller's ``__main__``: start-up costs the same from the CLI,
+a script or pytest, and solvers whose libraries cannot share a process (highspy and ortools) never
+meet. A worker builds its solver once, then solves the tasks it is sent one at a time; the runner
+kills a worker whose solve exceeds the hard limit and starts another.
+
+Runtimes come from :func:`gtsp_bench.registry.run_solver` inside the worker (the solver's own
+``solve`` call), so process start-up and instance parsing are never counted.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections import deque
+from collections.abc import Callable, Hashable, Mapping, Sequence
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection, wait
+from typing import Any
+
+#: Seconds a worker may take to import and build its solver.
+INIT_TIMEOUT_S = 300.0
+#: Thread-pool variables set to 1 in workers (unless already set): jobs x threads <= cores.
+THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+def failure(note: str, status: str = "failed") -> dict[str, Any]:
+    """A result record for a solve that gave no solution."""
+    return {"status": status, "objective": math.nan, "note": note}
+
+
+def _one_line(e: BaseException) -> str:
+    text = f"{type(e).__name__}: {e}"
+    return (text.splitlines() or [text])[0][:300]
+
+
+def _plain(stats: Mapping[str, Any]) -> dict[str, Any]:
+    """Solver statistics made JSON-safe (numbers, strings, booleans, None; others as text)."""
+    return {str(k): v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
+            for k, v in stats.items()}
+
+
+def _limit_threads() -> None:
+    torch = sys.modules.get("torch")
+    if torch is not None and torch.get_num_threads() != 1:
+        torch.set_num_threads(1)
+
+
+def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
+    """Solve one task message ``{fingerprint, text, omega, seed, time_limit}`` through the harness.
+
+    The instance JSON is parsed once per fingerprint; any exception becomes a ``failed`` record.
+    """
+    from gtsp_bench.parse import parse_json_instance
+    from gtsp_bench.registry import run_solver
+
+    start = time.perf_counter()
+    try:
+        inst = cache.get(msg["fingerprint"])
+        if inst is None:
+            inst = cache[msg["fingerprint"]] = parse_json_instance(msg["text"])
+        _limit_threads()
+        res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
+                         seed=msg["seed"], name=name)
+    except Exception as e:  # any solver error becomes a row; the run goes on
+        out = failure(_one_line(e))
+    else:
+        e = res.energy
+        out = {
+            "status": res.status, "objective": res.objective, "lower_bound": res.lower_bound,
+            "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
+            "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
+            "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
+            "note": "", "stats": _plain(res.stats),
+        }
+    out["task_wall_s"] = time.perf_counter() - start
+    return out
+
+
+def worker_main(fd: int) -> None:
+    """Entry point of a worker process: ``fd`` is its end of the socket pair."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the runner handles Ctrl-C and stops workers
+    conn = Connection(fd)
+    try:
+        name, target, description = conn.recv()
+        from gtsp_bench.registry import get_solver, register_solver, solver_names
+
+        if name not in solver_names() and target is not None:
+            register_solver(name, target, description)
+        solver = get_solver(name)
+        _limit_threads()
+        conn.send(("ready", None))
+    except (EOFError, OSError):
+        return
+    except Exception as e:
+        conn.send(("init_failed", _one_line(e)))
+        return
+    cache: dict[str, Any] = {}
+    while True:
+        try:
+            msg = conn.recv()
+            if msg is None:
+                return
+            conn.send(("done", solve_message(solver, name, msg, cache)))
+        except (EOFError, OSError):  # the runner is gone
+            return
+
+
+@dataclass
+class _Worker:
+    proc: subprocess.Popen
+    conn: Connection
+    ready: bool = False
+    job: Hashable | None = None
+    started: float = 0.0
+    born: float = field(default_factory=time.monotonic)
+
+
+def _start_worker(name: str, target: str | None, description: str) -> _Worker:
+    ours, theirs = socket.socketpair()
+    env = dict(os.environ)
+    for var in THREAD_VARS:
+        env.setdefault(var, "1")
+    env["PYTHONPATH"] = os.pathsep.join(p or os.getcwd() for p in sys.path)
+    code = "import sys; from gtsp_bench.pool import worker_main; worker_main(int(sys.argv[1]))"
+    try:
+        proc = subprocess.Popen([sys.executable, "-c", code, str(theirs.fileno())],
+                                pass_fds=[theirs.fileno()], env=env, stdin=subprocess.DEVNULL)
+    finally:
+        theirs.close()
+    conn = Connection(ours.detach())
+    conn.send((name, target, description))
+    return _Worker(proc, conn)
+
+
+def _stop_worker(w: _Worker, *, kill: bool = False) -> None:
+    if not kill:
+        try:
+            w.conn.send(None)
+            w.proc.wait(timeout=2)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+    if w.proc.poll() is None:
+        w.proc.kill()
+    w.proc.wait()
+    w.conn.close()
+
+
+@dataclass
+class PhaseStats:
+    """What one solver's phase cost: solves, the solvers' own time and the wall time."""
+
+    solver: str
+    solves: int = 0
+    solver_s: float = 0.0
+    wall_s: float = 0.0
+    workers: int = 0
+
+
+def run_jobs(
+    solver: str, target: str | None, description: str,
+    jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], n_workers: int, hard_limit: float,
+    on_result: Callable[[Hashable, dict[str, Any], bool], None],
+) -> PhaseStats:
+    """Solve ``jobs`` (``(job id, task message)`` pairs) with one solver in fresh workers.
+
+    Parameters
+    ----------
+    solver, target, description
+        The registered name, its ``"module:Class"`` target (registered in the worker if needed;
+        ``None`` for built-ins) and description.
+    n_workers
+        Worker processes to use (at most one per job).
+    hard_limit
+        Seconds after which a solve's worker is killed (the record gets status ``time_limit``).
+    on_result
+        Called as ``on_result(job id, record, persist)`` for every job; ``persist`` is ``False``
+        when the solver could not even be built, so that a later run retries it.
+    """
+    stats = PhaseStats(solver, workers=min(n_workers, len(jobs)))
+    if not jobs:
+        return stats
+    start = time.perf_counter()
+    pending = deque(jobs)
+    workers = [_start_worker(solver, target, description) for _ in range(stats.workers)]
+
+    def fail_all(note: str) -> None:
+        for job in [*(j for j, _ in pending), *(w.job for w in workers if w.job is not None)]:
+            on_result(job, failure(note), False)
+        pending.clear()
+        for w in workers:
+            w.job = None
+
+    def dispatch(w: _Worker) -> None:
+        if w.ready and w.job is None and pending:
+            w.job, msg = pending.popleft()
+            w.started = time.monotonic()
+            w.conn.send(msg)
+
+    try:
+        while workers and (pending or any(w.job is not None for w in workers)):
+            for w in workers:
+                dispatch(w)
+            wait([w.conn for w in workers], timeout=0.5)
+            now = time.monotonic()
+            for w in list(workers):
+                reply: tuple[str, Any] | None = ("dead", None)
+                try:
+                    if w.conn.poll():
+                        reply = w.conn.recv()
+                    elif w.proc.poll() is None:
+                        reply = None
+                except (EOFError, OSError):
+                    pass
+                if reply is None:
+                    over = w.job is not None and now - w.started > hard_limit
+                    stuck = not w.ready and now - w.born > INIT_TIMEOUT_S
+                    if not (over or stuck):
+                        continue
+                    reply = ("killed", None) if over else ("stuck", None)
+                kind, payload = reply
+                if kind == "ready":
+                    w.ready = True
+                    continue
+                if kind == "done":
+                    stats.solves += 1
+                    if math.isfinite(payload.get("runtime_s", math.nan)):
+                        stats.solver_s += payload["runtime_s"]
+                    job, w.job = w.job, None
+                    dispatch(w)  # the next solve runs while the result is logged
+                    on_result(job, payload, True)
+                    continue
+                _stop_worker(w, kill=True)  # unusable from here on
+                workers.remove(w)
+                if kind == "init_failed" or not w.ready:
+                    reason = payload if kind == "init_failed" else (
+                        "its worker timed out starting" if kind == "stuck"
+                        else f"its worker died (exit code {w.proc.returncode})")
+                    fail_all(f"solver could not be built: {reason}")
+                    return stats
+                if w.job is not None:
+                    rec = (failure(f"killed: no answer after {hard_limit:g} s", "time_limit")
+                           if kind == "killed" else
+                           failure(f"worker died (exit code {w.proc.returncode})"))
+                    on_result(w.job, rec, True)
+                if pending:
+                    workers.append(_start_worker(solver, target, description))
+    finally:
+        for w in workers:
+            _stop_worker(w, kill=w.job is not None)
+        stats.wall_s = time.perf_counter() - start
+    return stats

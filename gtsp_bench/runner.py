@@ -1,0 +1,653 @@
+"""The benchmark runner: the paper's experiments (section VI) as CSV tables, PNG figures and a report.
+
+Experiments (:data:`EXPERIMENTS`):
+
+``ratio-omega``
+    energy of each solver divided by the exact optimum, over a set of instances, for
+    omega = 0, 0.1, ..., 0.9, at K = 4 and K = 7 (paper figs. "Energy consumption comparison for 4 /
+    7 clusters");
+``ratio-k``
+    the same ratio for every K at omega = 0.5 (fig. "... when K varies");
+``runtime``
+    median seconds per instance for each solver and K (table "Running time comparison"); the same
+    solves as ``ratio-k``;
+``trajectories``
+    instance 0, K = 4 at omega = 0, .3, .6, .9 and K = 7 at omega = .1, .3, .5, .8: nodes, chosen
+    heads and each solver's tour;
+``training``
+    the training curves from ``<checkpoints>/<model>.train.csv``.
+
+How a run works. Instance sets are generated once into ``instances/`` (one JSON file per instance,
+seeded, re-used when present). Every (instance, omega, solver) solve is a *task* whose key holds the
+instance's content hash, the solver, omega, seed and time limit. Finished tasks are appended as one
+JSON line each to ``<out>/tmp/runs.jsonl`` (flushed and fsynced; a torn last line is dropped), so an
+interrupted run resumes without redoing anything and experiments share their solves (``runtime``
+re-uses ``ratio-k``). Tasks run solver by solver, each solver in fresh worker processes
+(``forkserver``): highspy and ortools never meet in one process, and a worker that hangs past the
+hard limit is killed without stopping the run. A solver that raises or times out gives a row with
+status ``failed`` / ``time_limit``. Runtimes are the solver's own ``runtime_s`` from
+:func:`gtsp_bench.registry.run_solver`, never process start-up. Finally each experiment's tidy CSV
+and PNG are written atomically and the generated blocks of ``<out>/README.md`` are refreshed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import os
+import sys
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
+from gtsp_bench.instance import Instance
+from gtsp_bench.io import atomic_write_bytes, atomic_write_text, read_instance
+from gtsp_bench.parse import format_json_instance
+from gtsp_bench.pool import PhaseStats, run_jobs
+from gtsp_bench.report import (
+    PAPER_RUNTIME_S,
+    ks_text,
+    parse_ints,
+    read_training_logs,
+    write_report,
+)
+
+EXPERIMENTS = ("ratio-omega", "ratio-k", "runtime", "trajectories", "training")
+#: The paper's cluster counts for the omega sweeps and the trajectory figures.
+PAPER_OMEGA_KS = (4, 7)
+OMEGAS = tuple(round(0.1 * i, 1) for i in range(10))
+QUICK_OMEGAS = (0.0, 0.5, 0.9)
+RATIO_K_OMEGA = 0.5
+TRAJECTORY_OMEGAS = {4: (0.0, 0.3, 0.6, 0.9), 7: (0.1, 0.3, 0.5, 0.8)}
+DEFAULT_KS = tuple(range(4, 11))
+QUICK_KS = (4, 5)
+DEFAULT_INSTANCES = 30
+QUICK_INSTANCES = 3
+DEFAULT_SEED = 1
+DEFAULT_NODES = 20
+DEFAULT_TIME_LIMIT = 10.0
+SOLVER_SEED = 0
+#: The default reference is ``dp`` up to this K, then ``milp``; ``brute`` when neither exists.
+DP_MAX_K = 12
+#: A worker gets ``HARD_LIMIT_FACTOR * time_limit + HARD_LIMIT_GRACE_S`` seconds per solve before
+#: it is killed (solvers are expected to stop themselves at ``time_limit``).
+HARD_LIMIT_FACTOR = 2.0
+HARD_LIMIT_GRACE_S = 10.0
+#: Columns of every solve experiment's CSV, in order.
+CSV_COLUMNS = (
+    "experiment", "K", "N", "instance", "omega", "solver", "seed", "status", "objective",
+    "optimum", "ratio", "gap_pct", "reference", "ref_status", "ground_J", "flight_J", "hover_J",
+    "distance_m", "lower_bound", "runtime_s", "time_limit_s", "order", "heads",
+    "same_tour_as_reference", "note",
+)
+
+
+# ---------------------------------------------------------------------- configuration
+def parse_ks(text: str) -> tuple[int, ...]:
+    """Parse cluster counts: a range ``4..10``, a list ``4,7``, or a mix ``4,6..8``.
+
+    Raises
+    ------
+    InputError
+        For anything else, a reversed range, or K < 1.
+    """
+    out: set[int] = set()
+    for part in str(text).replace(" ", "").split(","):
+        lo, sep, hi = part.partition("..")
+        try:
+            a = int(lo)
+            b = int(hi) if sep else a
+        except ValueError:
+            raise InputError(
+                f"bad K {text!r}: expected a range like 4..10 or a list like 4,7"
+            ) from None
+        if a < 1 or b < a:
+            raise InputError(f"bad K {text!r}: cluster counts must be >= 1 and ranges increasing")
+        out.update(range(a, b + 1))
+    return tuple(sorted(out))
+
+
+def _split_names(text: str | Sequence[str], what: str, valid: Sequence[str]) -> tuple[str, ...]:
+    names = text.split(",") if isinstance(text, str) else list(text)
+    names = [n.strip() for n in names if n.strip()]
+    if not names:
+        raise InputError(f"no {what} given")
+    for n in names:
+        if n not in valid:
+            raise InputError(f"unknown {what} {n!r} (valid: {', '.join(valid)})")
+    return tuple(dict.fromkeys(names))
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """A validated benchmark run; build it with :func:`make_config`."""
+
+    experiments: tuple[str, ...]
+    ks: tuple[int, ...]
+    solvers: tuple[str, ...]
+    references: Mapping[int, str]
+    n_instances: int
+    n_nodes: int
+    seed: int
+    time_limit: float
+    jobs: int
+    quick: bool
+    out_dir: Path
+    instance_dir: Path
+    checkpoint_dir: Path
+    fresh: bool = False
+    progress: bool = True
+    omegas: tuple[float, ...] = OMEGAS
+
+    @property
+    def omega_ks(self) -> tuple[int, ...]:
+        """K values of the omega sweeps: the paper's 4 and 7 when selected, else min and max K."""
+        ks = tuple(k for k in PAPER_OMEGA_KS if k in self.ks)
+        return ks or tuple(sorted({min(self.ks), max(self.ks)}))
+
+    @property
+    def log_path(self) -> Path:
+        """The task log that makes runs resumable."""
+        return self.out_dir / "tmp" / "runs.jsonl"
+
+    def hard_limit(self) -> float:
+        """Seconds after which a worker's solve is killed."""
+        return HARD_LIMIT_FACTOR * self.time_limit + HARD_LIMIT_GRACE_S
+
+
+def resolve_references(reference: str | None, ks: Iterable[int], registered: Sequence[str]) -> dict[int, str]:
+    """The exact solver giving the optimum for each K.
+
+    ``None`` or ``"auto"``: ``dp`` for K <= :data:`DP_MAX_K`, else ``milp``, whichever is
+    registered; ``brute`` (tiny instances only) when neither is.
+    """
+    ks = list(ks)
+    if reference not in (None, "auto"):
+        if reference not in registered:
+            raise InputError(f"unknown reference solver {reference!r} (valid: {', '.join(registered)})")
+        return dict.fromkeys(ks, reference)
+    out = {}
+    for k in ks:
+        prefs = ("dp", "milp") if k <= DP_MAX_K else ("milp", "dp")
+        choice = next((p for p in (*prefs, "brute") if p in registered), None)
+        if choice is None:
+            raise InputError("no exact reference solver is registered (dp, milp or brute); pass --reference")
+        out[k] = choice
+    return out
+
+
+def make_config(
+    *,
+    experiments: str | Sequence[str] = "all",
+    ks: str | Sequence[int] | None = None,
+    solvers: str | Sequence[str] | None = None,
+    reference: str | None = None,
+    n_instances: int | None = None,
+    n_nodes: int = DEFAULT_NODES,
+    seed: int = DEFAULT_SEED,
+    time_limit: float = DEFAULT_TIME_LIMIT,
+    jobs: int | None = None,
+    quick: bool = False,
+    out_dir: str | os.PathLike[str] | None = None,
+    instance_dir: str | os.PathLike[str] = "instances",
+    checkpoint_dir: str | os.PathLike[str] = "solvers/checkpoints",
+    fresh: bool = False,
+    progress: bool = True,
+) -> BenchConfig:
+    """Validate every option before anything is written.
+
+    ``quick`` changes the defaults only (K = 4, 5; 3 instances; omega 0, .5, .9; output in
+    ``results/quick``); explicit values win.
+
+    Raises
+    ------
+    InputError
+        A bad K, an unknown experiment, solver or reference, or a bad count or limit.
+    """
+    from gtsp_bench.registry import check_time_limit, solver_names, solver_specs
+
+    registered = solver_names()
+    if experiments in ("all", None):
+        exps = EXPERIMENTS
+    else:
+        exps = _split_names(experiments, "experiment", (*EXPERIMENTS, "all"))
+        exps = EXPERIMENTS if "all" in exps else exps
+    if ks is None:
+        k_tuple = QUICK_KS if quick else DEFAULT_KS
+    elif isinstance(ks, str):
+        k_tuple = parse_ks(ks)
+    else:
+        k_tuple = parse_ks(",".join(str(int(k)) for k in ks))
+    if solvers is None:
+        chosen = tuple(s.name for s in solver_specs() if s.bench)
+        if not chosen:
+            raise InputError("no solver is registered for benchmarking; pass --solvers")
+    else:
+        chosen = _split_names(solvers, "solver", registered)
+    n_inst = n_instances if n_instances is not None else (QUICK_INSTANCES if quick else DEFAULT_INSTANCES)
+    for name, value in (("number of instances", n_inst), ("number of nodes", n_nodes)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f"{name} must be an integer >= 1, got {value!r}")
+    for k in (min(k_tuple), max(k_tuple)):
+        check_generator_args(k, n_nodes, DEFAULT_ZETA, 1000.0)
+    tl = check_time_limit(time_limit)
+    if tl is None:
+        raise InputError("the runner needs a per-solve time limit")
+    n_jobs = (os.cpu_count() or 1) if jobs is None else jobs
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int) or n_jobs < 1:
+        raise InputError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if out_dir is None:
+        out_dir = Path("results") / "quick" if quick else Path("results")
+    return BenchConfig(
+        experiments=exps, ks=k_tuple, solvers=chosen,
+        references=resolve_references(reference, k_tuple, registered),
+        n_instances=n_inst, n_nodes=n_nodes, seed=int(seed), time_limit=tl, jobs=n_jobs,
+        quick=quick, out_dir=Path(out_dir), instance_dir=Path(instance_dir),
+        checkpoint_dir=Path(checkpoint_dir), fresh=fresh, progress=progress,
+        omegas=QUICK_OMEGAS if quick else OMEGAS,
+    )
+
+
+# ---------------------------------------------------------------------- instances
+@dataclass(frozen=True)
+class StoredInstance:
+    """An instance with its file text and content hash."""
+
+    instance: Instance
+    text: str
+    fingerprint: str
+    path: Path
+
+
+def load_instance_set(config: BenchConfig, k: int, n: int) -> list[StoredInstance]:
+    """The first ``n`` instances of the seeded set for K = ``k``, written once and re-used.
+
+    A file present with other generator settings than asked is an error (it is never
+    overwritten); one whose coordinates differ from what the generator gives now is used, with a
+    warning.
+    """
+    folder = config.instance_dir / f"uav-K{k}-N{config.n_nodes}-s{config.seed}"
+    generated = instance_set(n, k, config.seed, config.n_nodes)
+    out = []
+    for fresh in generated:
+        path = folder / f"{fresh.name}.json"
+        fresh_text = format_json_instance(fresh)
+        if path.exists():
+            inst = read_instance(path)
+            text = path.read_text(encoding="utf-8")
+            want = dict(fresh.meta["generator"])
+            have = dict(inst.meta.get("generator", {}))
+            if have != want:
+                raise InputError(f"{path}: its generator settings {have} are not {want}; "
+                                 f"move it away to regenerate it")
+            if text != fresh_text:
+                print(f"gtsp-bench: warning: {path} differs from what the generator gives now; "
+                      f"using the file", file=sys.stderr)
+        else:
+            atomic_write_text(path, fresh_text)
+            inst, text = fresh, fresh_text
+        digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+        out.append(StoredInstance(inst, text, digest, path))
+    return out
+
+
+# ---------------------------------------------------------------------- experiments -> tasks
+@dataclass(frozen=True)
+class Cell:
+    """One (K, instance index, omega) point of an experiment."""
+
+    k: int
+    index: int
+    omega: float
+
+
+def experiment_cells(config: BenchConfig, experiment: str) -> list[Cell]:
+    """The (K, instance, omega) points an experiment needs (none for ``training``)."""
+    if experiment == "ratio-omega":
+        return [Cell(k, i, w) for k in config.omega_ks for w in config.omegas
+                for i in range(config.n_instances)]
+    if experiment in ("ratio-k", "runtime"):
+        return [Cell(k, i, RATIO_K_OMEGA) for k in config.ks for i in range(config.n_instances)]
+    if experiment == "trajectories":
+        return [Cell(k, 0, w) for k in config.omega_ks
+                for w in TRAJECTORY_OMEGAS.get(k, TRAJECTORY_OMEGAS[4])]
+    return []
+
+
+def experiment_solvers(config: BenchConfig, k: int) -> tuple[str, ...]:
+    """Solvers run at K = ``k``: the selected ones and the reference."""
+    return tuple(dict.fromkeys((*config.solvers, config.references[k])))
+
+
+@dataclass(frozen=True)
+class Task:
+    """One solve; ``key`` identifies it in the task log."""
+
+    key: str
+    solver: str
+    omega: float
+    instance: StoredInstance
+    seed: int
+    time_limit: float
+
+
+def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float) -> str:
+    """The log key: the instance's name and content hash, the solver and the solve settings."""
+    return f"{inst.instance.name}#{inst.fingerprint}|{solver}|w={omega:g}|seed={seed}|tl={time_limit:g}"
+
+
+def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str, Task]]:
+    """Load the instance sets the selected experiments need and list their tasks (deduplicated)."""
+    cells = [c for e in config.experiments for c in experiment_cells(config, e)]
+    need: dict[int, int] = {}
+    for c in cells:
+        need[c.k] = max(need.get(c.k, 0), c.index + 1)
+    sets = {k: load_instance_set(config, k, n) for k, n in sorted(need.items())}
+    tasks: dict[str, Task] = {}
+    for c in cells:
+        inst = sets[c.k][c.index]
+        for s in experiment_solvers(config, c.k):
+            key = task_key(inst, s, c.omega, SOLVER_SEED, config.time_limit)
+            tasks.setdefault(key, Task(key, s, c.omega, inst, SOLVER_SEED, config.time_limit))
+    return sets, tasks
+
+
+# ---------------------------------------------------------------------- the task log
+class TaskLog:
+    """Finished tasks, one JSON object per line, appended with flush and fsync.
+
+    Reading drops a torn last line (a run killed mid-write) and keeps the last record of a key.
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._file: io.TextIOWrapper | None = None
+
+    def load(self) -> dict[str, dict[str, Any]]:
+        """Records by key; cuts a torn last line off the file."""
+        if not self.path.exists():
+            return {}
+        data = self.path.read_bytes()
+        end = data.rfind(b"\n") + 1
+        if end < len(data):
+            with open(self.path, "r+b") as f:
+                f.truncate(end)
+        records = {}
+        for line in data[:end].splitlines():
+            try:
+                rec = json.loads(line)
+            except ValueError:
+                continue
+            if isinstance(rec, dict) and "key" in rec:
+                records[rec["key"]] = rec
+        return records
+
+    def append(self, record: Mapping[str, Any]) -> None:
+        """Append one record durably."""
+        if self._file is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (closed in close())
+        self._file.write(json.dumps(record, allow_nan=True) + "\n")
+        self._file.flush()
+        os.fsync(self._file.fileno())
+
+    def close(self) -> None:
+        """Close the file (appending reopens it)."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+# ---------------------------------------------------------------------- execution
+def _task_message(t: Task) -> dict[str, Any]:
+    return {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
+            "seed": t.seed, "time_limit": t.time_limit}
+
+
+def run_solver_tasks(
+    solver: str, tasks: Sequence[Task], jobs: int, hard_limit: float,
+    on_record: Callable[[Task, dict[str, Any], bool], None],
+) -> PhaseStats:
+    """Run one solver's tasks in ``jobs`` fresh worker processes (:func:`gtsp_bench.pool.run_jobs`)."""
+    from gtsp_bench.registry import solver_specs
+
+    spec = next(s for s in solver_specs() if s.name == solver)
+    target = spec.target if isinstance(spec.target, str) else None
+    by_key = {t.key: t for t in tasks}
+    return run_jobs(solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks],
+                    jobs, hard_limit, lambda key, rec, persist: on_record(by_key[key], rec, persist))
+
+
+# ---------------------------------------------------------------------- rows and tables
+def _same_tour(a: Mapping[str, Any], b: Mapping[str, Any]) -> bool:
+    oa, ob = a.get("order"), b.get("order")
+    if not oa or not ob or a.get("heads") != b.get("heads"):
+        return False
+    return oa == ob or oa == ob[::-1]
+
+
+def _row(experiment: str, cell: Cell, inst: StoredInstance, solver: str, reference: str,
+         rec: Mapping[str, Any], ref: Mapping[str, Any], time_limit: float) -> dict[str, Any]:
+    obj = float(rec.get("objective", math.nan))
+    ref_ok = ref.get("status") == "optimal" and np.isfinite(ref.get("objective", math.nan))
+    optimum = float(ref["objective"]) if ref_ok else math.nan
+    notes = [rec.get("note", "")] if rec.get("note") else []
+    if not ref_ok:
+        notes.append(f"reference {reference} not optimal ({ref.get('status')})")
+    ratio = obj / optimum if ref_ok and np.isfinite(obj) else math.nan
+    if np.isfinite(ratio) and ratio < 1 - 1e-9:
+        notes.append("below the reference optimum")
+    return {
+        "experiment": experiment, "K": cell.k, "N": int(inst.instance.sizes[0]),
+        "instance": inst.instance.name, "omega": cell.omega, "solver": solver,
+        "seed": SOLVER_SEED, "status": rec.get("status"), "objective": obj, "optimum": optimum,
+        "ratio": ratio, "gap_pct": 100 * (ratio - 1) if np.isfinite(ratio) else math.nan,
+        "reference": reference, "ref_status": ref.get("status"),
+        "ground_J": rec.get("ground_J", math.nan), "flight_J": rec.get("flight_J", math.nan),
+        "hover_J": rec.get("hover_J", math.nan), "distance_m": rec.get("distance_m", math.nan),
+        "lower_bound": rec.get("lower_bound"), "runtime_s": rec.get("runtime_s", math.nan),
+        "time_limit_s": time_limit,
+        "order": " ".join(map(str, rec.get("order") or [])),
+        "heads": " ".join(map(str, rec.get("heads") or [])),
+        "same_tour_as_reference": _same_tour(rec, ref), "note": "; ".join(notes),
+    }
+
+
+def experiment_rows(config: BenchConfig, experiment: str, sets: Mapping[int, list[StoredInstance]],
+                    records: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+    """The tidy table of one experiment: one row per instance x omega x solver."""
+    rows = []
+    for cell in experiment_cells(config, experiment):
+        inst = sets[cell.k][cell.index]
+        reference = config.references[cell.k]
+        ref = records[task_key(inst, reference, cell.omega, SOLVER_SEED, config.time_limit)]
+        for s in experiment_solvers(config, cell.k):
+            rec = records[task_key(inst, s, cell.omega, SOLVER_SEED, config.time_limit)]
+            rows.append(_row(experiment, cell, inst, s, reference, rec, ref, config.time_limit))
+    return pd.DataFrame(rows, columns=list(CSV_COLUMNS))
+
+
+# ---------------------------------------------------------------------- figures
+def _save(fig: Any, path: Path) -> None:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    atomic_write_bytes(path, buf.getvalue())
+
+
+def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Any, np.ndarray]:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(size[0] * ncols, size[1] * nrows), layout="constrained")
+    axes = np.atleast_2d(fig.subplots(nrows, ncols, squeeze=False))
+    return fig, axes
+
+
+def figure_for(config: BenchConfig, experiment: str, df: pd.DataFrame,
+               sets: Mapping[int, list[StoredInstance]]) -> Any:
+    """The PNG figure of an experiment from its table."""
+    from gtsp_bench import plots
+
+    if experiment == "ratio-omega":
+        ks = sorted(df["K"].unique())
+        fig, axes = _figure(1, len(ks), (5.5, 4))
+        for ax, k in zip(axes[0], ks, strict=True):
+            sub = df[df["K"] == k]
+            plots.plot_ratio(sub, "omega", ax=ax, reference=sub["reference"].iloc[0])
+            ax.set_title(f"Energy / optimum, K = {k} ({sub['instance'].nunique()} instances)")
+        return fig
+    if experiment == "ratio-k":
+        fig, axes = _figure(1, 1, (6, 4))
+        plots.plot_ratio(df, "K", ax=axes[0, 0], reference="/".join(sorted(df["reference"].unique())))
+        axes[0, 0].set_title(f"Energy / optimum, omega = {RATIO_K_OMEGA:g}")
+        return fig
+    if experiment == "runtime":
+        fig, axes = _figure(1, 1, (6.5, 4.5))
+        plots.plot_runtime(df, ax=axes[0, 0], paper=PAPER_RUNTIME_S)
+        return fig
+    if experiment == "trajectories":
+        ks = sorted(df["K"].unique())
+        ncols = max(len(df[df["K"] == k]["omega"].unique()) for k in ks)
+        fig, axes = _figure(len(ks), ncols, (4.6, 4.6))
+        for r, k in enumerate(ks):
+            sub = df[df["K"] == k]
+            omegas = sorted(sub["omega"].unique())
+            for c in range(ncols):
+                ax = axes[r, c]
+                if c >= len(omegas):
+                    ax.set_visible(False)
+                    continue
+                panel = sub[sub["omega"] == omegas[c]]
+                tours = {row.solver: (parse_ints(row.order), parse_ints(row.heads))
+                         for row in panel.itertuples() if row.order}
+                plots.plot_trajectory(sets[k][0].instance, tours, ax=ax,
+                                      title=f"K = {k}, omega = {omegas[c]:g}")
+        return fig
+    raise ValueError(experiment)
+
+
+def training_figure(df: pd.DataFrame) -> Any:
+    """Loss and validation energy against training step, one line per model."""
+    from gtsp_bench import plots
+
+    fig, axes = _figure(1, 2, (5.5, 4))
+    plots.plot_training(df, "loss", ax=axes[0, 0])
+    plots.plot_training(df, "val_energy", ax=axes[0, 1])
+    return fig
+
+
+# ---------------------------------------------------------------------- the run
+@dataclass
+class RunSummary:
+    """What :func:`run_bench` did."""
+
+    tasks: int = 0
+    cached: int = 0
+    run: int = 0
+    failed: int = 0
+    phases: list[PhaseStats] = field(default_factory=list)
+    written: list[Path] = field(default_factory=list)
+    wall_s: float = 0.0
+    messages: list[str] = field(default_factory=list)
+
+
+def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) -> RunSummary:
+    """Run the configured experiments; write their CSV and PNG files and refresh the report.
+
+    Finished solves found in the task log are not redone (unless ``config.fresh``).
+    """
+    say = log or (lambda msg: print(msg, file=sys.stderr))
+    t0 = time.perf_counter()
+    summary = RunSummary()
+    refs: dict[str, list[int]] = {}
+    for k, r in config.references.items():
+        refs.setdefault(r, []).append(k)
+    for r, ks in refs.items():
+        note = " (neither dp nor milp is registered; brute handles tiny instances only)" \
+            if r == "brute" else ""
+        say(f"reference optimum: {r} for K = {ks_text(ks)}{note}")
+    sets, tasks = plan(config)
+    task_log = TaskLog(config.log_path)
+    records = task_log.load()
+    done = {} if config.fresh else records
+    todo = [t for t in tasks.values() if t.key not in done]
+    summary.tasks, summary.cached = len(tasks), len(tasks) - len(todo)
+    say(f"{len(tasks)} solves, {summary.cached} already in {config.log_path}, {len(todo)} to run "
+        f"with {config.jobs} worker(s), time limit {config.time_limit:g} s")
+    transient: dict[str, dict[str, Any]] = {}
+    if todo:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(todo), unit="solve", disable=not config.progress, dynamic_ncols=True)
+
+        def on_record(task: Task, rec: dict[str, Any], persist: bool) -> None:
+            full = {"key": task.key, "instance": task.instance.instance.name, "solver": task.solver,
+                    "omega": task.omega, "seed": task.seed, "time_limit": task.time_limit, **rec}
+            if persist:
+                task_log.append(full)
+            else:
+                transient[task.key] = full
+            records[task.key] = full
+            summary.run += 1
+            summary.failed += full["status"] == "failed"
+            bar.update()
+
+        order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
+        try:
+            for solver in order:
+                mine = [t for t in todo if t.solver == solver]
+                if mine:
+                    bar.set_description(solver)
+                    summary.phases.append(run_solver_tasks(
+                        solver, mine, config.jobs, config.hard_limit(), on_record))
+        finally:
+            bar.close()
+            task_log.close()
+        for p in summary.phases:
+            say(f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
+                f"{p.wall_s:.1f} s on {p.workers} worker(s)")
+    for solver in sorted({r["solver"] for r in transient.values()}):
+        note = next(r["note"] for r in transient.values() if r["solver"] == solver)
+        say(f"warning: {solver}: {note} (not recorded: a rerun retries it)")
+    write_outputs(config, sets, records, summary, say)
+    summary.wall_s = time.perf_counter() - t0
+    say(f"done in {summary.wall_s:.1f} s: {summary.run} solves run, {summary.cached} re-used, "
+        f"{summary.failed} failed")
+    return summary
+
+
+def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
+                  records: Mapping[str, Mapping[str, Any]], summary: RunSummary,
+                  say: Callable[[str], None]) -> None:
+    """Write each experiment's CSV and PNG, then refresh the report."""
+    for exp in config.experiments:
+        csv_path, png_path = config.out_dir / f"{exp}.csv", config.out_dir / f"{exp}.png"
+        if exp == "training":
+            df = read_training_logs(config.checkpoint_dir)
+            if df is None:
+                say(f"training: no training log {config.checkpoint_dir}/<model>.train.csv; skipped")
+                continue
+            fig = training_figure(df)
+        else:
+            df = experiment_rows(config, exp, sets, records)
+            fig = figure_for(config, exp, df, sets)
+        atomic_write_text(csv_path, df.to_csv(index=False, float_format="%.10g"))
+        _save(fig, png_path)
+        summary.written += [csv_path, png_path]
+    path = write_report(config.out_dir, config.checkpoint_dir, config.jobs)
+    summary.written.append(path)
+    say("wrote " + ", ".join(str(p) for p in summary.written))
+
+
+__all__ = [
+    "CSV_COLUMNS", "EXPERIMENTS", "BenchConfig", "Cell", "RunSummary", "TaskLog",
+    "experiment_cells", "make_config", "parse_ks", "plan", "resolve_references", "run_bench",
+]

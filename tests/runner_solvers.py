@@ -1,0 +1,90 @@
+"""Misbehaving and slow solvers for tests/test_runner.py, kept light: the runner's worker
+processes import this module as ``tests.runner_solvers``."""
+
+from __future__ import annotations
+
+import time
+
+from gtsp_bench.registry import Solution, register_solver
+
+
+class Crash:
+    """Raises on every solve."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        raise RuntimeError("boom")
+
+
+class Hang:
+    """Ignores its time limit and sleeps far beyond it."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        time.sleep(60)
+        raise AssertionError("not reached")
+
+
+class Slow:
+    """Greedy after a 0.1 s pause: a run long enough to be killed midway."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        from solvers.greedy import Greedy
+
+        time.sleep(0.1)
+        return Greedy().solve(instance, omega)
+
+
+class FixedTour:
+    """Clusters in index order, every head 0: feasible, usually not optimal."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        from gtsp_bench.energy import evaluate
+
+        order, heads = list(range(instance.n_clusters)), [0] * instance.n_clusters
+        return Solution(order, heads, evaluate(instance, omega, order, heads).objective)
+
+
+class _GreedyAfterImport:
+    """Greedy, after importing ``module`` (a library that may not share a process with another)."""
+
+    module = ""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import importlib
+
+        from solvers.greedy import Greedy
+
+        lib = importlib.import_module(self.module)
+        sol = Greedy().solve(instance, omega)
+        stats = {"module": self.module}
+        if self.module == "torch":
+            stats["torch_threads"] = lib.get_num_threads()
+        return Solution(sol.order, sol.heads, sol.objective, sol.status, stats=stats)
+
+
+class UsesHighs(_GreedyAfterImport):
+    """Imports highspy."""
+
+    module = "highspy"
+
+
+class UsesOrtools(_GreedyAfterImport):
+    """Imports ortools' CP-SAT."""
+
+    module = "ortools.sat.python.cp_model"
+
+
+class UsesTorch(_GreedyAfterImport):
+    """Imports torch and reports its thread count."""
+
+    module = "torch"
+
+
+def register() -> None:
+    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-highs, t-ortools, t-torch
+    and t-missing (whose class does not exist), all with ``bench=False``."""
+    for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
+                      ("t-fixed", "FixedTour"), ("t-highs", "UsesHighs"),
+                      ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),
+                      ("t-missing", "NoSuchClass")):
+        register_solver(name, f"tests.runner_solvers:{cls}", "runner test solver", bench=False,
+                        replace=True)

@@ -1,0 +1,276 @@
+"""The benchmark runner: quick mode end to end, resuming after an interruption or a kill, failing
+and hanging solvers as rows, instance sets, and bad input rejected before anything is written."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+from gtsp_bench import runner
+from gtsp_bench.cli import main
+from gtsp_bench.errors import InputError
+from gtsp_bench.runner import CSV_COLUMNS, TaskLog, make_config, parse_ks, resolve_references, run_bench
+
+from . import runner_solvers
+from .conftest import REPO
+
+matplotlib.use("Agg")
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+runner_solvers.register()
+
+
+def _dirs(tmp_path: Path) -> list[str]:
+    return ["--out", str(tmp_path / "out"), "--instance-dir", str(tmp_path / "inst"),
+            "--checkpoints", str(tmp_path / "ckpt"), "--no-progress"]
+
+
+def _config(tmp_path: Path, **kw):
+    kw = {"out_dir": tmp_path / "out", "instance_dir": tmp_path / "inst",
+          "checkpoint_dir": tmp_path / "ckpt", "progress": False, "n_nodes": 4, "jobs": 2, **kw}
+    return make_config(**kw)
+
+
+def _log_lines(config) -> list[str]:
+    return config.log_path.read_text().splitlines() if config.log_path.exists() else []
+
+
+def test_parse_ks_forms_and_errors():
+    """Ranges, lists and mixes parse; reversed ranges, words and zero are refused."""
+    assert parse_ks("4..10") == tuple(range(4, 11))
+    assert parse_ks("4,7") == (4, 7)
+    assert parse_ks("7, 4,5..6,4") == (4, 5, 6, 7)
+    for bad in ("10..4", "four", "4..", "0", "", "4;7"):
+        with pytest.raises(InputError, match="bad K"):
+            parse_ks(bad)
+
+
+def test_reference_resolution():
+    """dp up to K=12 then milp; brute when neither is registered; unknown names refused."""
+    refs = resolve_references("auto", [4, 12, 13], ["dp", "greedy", "milp"])
+    assert refs == {4: "dp", 12: "dp", 13: "milp"}
+    assert resolve_references(None, [4], ["brute", "greedy"]) == {4: "brute"}
+    assert resolve_references("milp", [4, 5], ["dp", "milp"]) == {4: "milp", 5: "milp"}
+    with pytest.raises(InputError, match="unknown reference solver 'gurobi'"):
+        resolve_references("gurobi", [4], ["dp"])
+    with pytest.raises(InputError, match="no exact reference solver"):
+        resolve_references("auto", [4], ["greedy"])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["-K", "10..4"], "bad K '10..4'"),
+    (["-K", "4..x"], "bad K '4..x'"),
+    (["-K", "60"], "would cover"),
+    (["--solvers", "greedy,magic"], "unknown solver 'magic' (valid: "),
+    (["--experiments", "ratio-omega,speed"], "unknown experiment 'speed' (valid: "),
+    (["--reference", "gurobi"], "unknown reference solver 'gurobi'"),
+    (["--jobs", "0"], "jobs must be an integer >= 1"),
+    (["--time-limit", "0"], "time limit must be > 0"),
+    (["--instances", "0"], "number of instances must be an integer >= 1"),
+    (["--report-only"], "no experiment CSV files to report on"),
+])
+def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
+    """A bad K, solver, experiment or option: one error line, exit 2, no file or folder made."""
+    code = main(["bench", *args, *_dirs(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("gtsp-bench: error: ") and message in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def _check_png(path: Path) -> None:
+    from PIL import Image
+
+    data = path.read_bytes()
+    assert data.startswith(PNG_SIGNATURE), path
+    with Image.open(path) as im:
+        im.verify()
+    img = matplotlib.image.imread(path)
+    assert img.ndim == 3 and img.shape[0] > 100 and img.shape[1] > 100
+
+
+def test_quick_mode_end_to_end(tmp_path, capsys):
+    """--quick with the default solvers writes every CSV (documented columns, one row per
+    instance x omega x solver, sane ratios), a valid PNG per experiment and the report."""
+    ckpt = tmp_path / "ckpt"
+    ckpt.mkdir()
+    (ckpt / "toy.train.csv").write_text(
+        "step,loss,reward,val_energy,wall_s,extra\n0,5.0,-3000,3100,0.1,1\n10,2.0,-2900,3000,1.0,1\n")
+    code = main(["bench", "--quick", "--nodes", "5", "--jobs", "2", *_dirs(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    out = tmp_path / "out"
+    config = _config(tmp_path, quick=True, n_nodes=5)
+    n_solvers = len(set(config.solvers) | set(config.references.values()))
+    for exp in ("ratio-omega", "ratio-k", "runtime", "trajectories"):
+        df = pd.read_csv(out / f"{exp}.csv")
+        assert tuple(df.columns) == CSV_COLUMNS
+        cells = runner.experiment_cells(config, exp)
+        assert len(df) == len(cells) * n_solvers
+        assert not df.duplicated(["instance", "omega", "solver"]).any()
+        ref = df[df["solver"] == df["reference"]]
+        assert (ref["status"] == "optimal").all() and np.allclose(ref["ratio"], 1.0)
+        ok = df[df["status"] != "failed"]
+        assert (ok["ratio"] >= 1 - 1e-9).all() and (ok["runtime_s"] >= 0).all()
+        greedy = df[df["solver"] == "greedy"]
+        assert len(greedy) and (greedy["status"] == "feasible").all()
+        _check_png(out / f"{exp}.png")
+    assert set(pd.read_csv(out / "ratio-omega.csv")["omega"]) == set(runner.QUICK_OMEGAS)
+    assert set(pd.read_csv(out / "ratio-k.csv")["K"]) == set(runner.QUICK_KS)
+    training = pd.read_csv(out / "training.csv")
+    assert list(training.columns[:6]) == ["model", "step", "loss", "reward", "val_energy", "wall_s"]
+    _check_png(out / "training.png")
+    report = (out / "README.md").read_text()
+    assert "<!-- BEGIN generated:runtime -->" in report and "| paper Greedy |" in report
+    assert "(not run)" not in report
+    n_files = sum(1 for _ in (tmp_path / "inst").rglob("*.json"))
+    assert n_files == runner.QUICK_INSTANCES * len(runner.QUICK_KS)
+
+
+def test_interrupt_then_resume_redoes_nothing(tmp_path, monkeypatch):
+    """Ctrl-C after 5 finished solves keeps them; the rerun runs only the rest, with no duplicates."""
+    config = _config(tmp_path, experiments="ratio-k", ks="3,4", solvers="greedy,t-fixed",
+                     n_instances=3)
+    calls = {"n": 0}
+    original = TaskLog.append
+
+    def append_then_interrupt(self, record):
+        original(self, record)
+        calls["n"] += 1
+        if calls["n"] == 5:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(TaskLog, "append", append_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        run_bench(config, log=lambda m: None)
+    first = _log_lines(config)
+    assert len(first) == 5
+    assert not (tmp_path / "out" / "ratio-k.csv").exists()
+    monkeypatch.setattr(TaskLog, "append", original)
+    summary = run_bench(config, log=lambda m: None)
+    assert summary.cached == 5 and summary.run == summary.tasks - 5
+    lines = _log_lines(config)
+    assert lines[:5] == first and len(lines) == summary.tasks
+    keys = [json.loads(line)["key"] for line in lines]
+    assert len(set(keys)) == len(keys)
+    again = run_bench(config, log=lambda m: None)
+    assert again.run == 0 and again.cached == again.tasks
+    assert _log_lines(config) == lines
+
+
+def test_killed_run_resumes(tmp_path):
+    """SIGKILL of a running `gtsp-bench bench` midway, plus a torn last line: the rerun keeps every
+    finished solve, drops the torn line, and runs exactly the missing ones."""
+    config = _config(tmp_path, experiments="ratio-omega", ks="3", solvers="t-slow", n_instances=3)
+    argv = ["bench", "-e", "ratio-omega", "-K", "3", "--solvers", "t-slow", "--instances", "3",
+            "--nodes", "4", "--jobs", "2", *_dirs(tmp_path)]
+    launcher = ("import tests.runner_solvers as t; t.register(); from gtsp_bench.cli import main; "
+                f"raise SystemExit(main({argv!r}))")
+    cmd = [sys.executable, "-c", launcher]
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    n_ref = 3 * len(runner.OMEGAS)  # the reference solves come first
+    deadline = time.monotonic() + 30
+    try:
+        while len(_log_lines(config)) < n_ref + 3 and time.monotonic() < deadline:
+            time.sleep(0.02)
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    before = _log_lines(config)
+    total = 2 * n_ref
+    assert n_ref + 3 <= len(before) < total, "the run was not killed midway"
+    with open(config.log_path, "a") as f:
+        f.write('{"key": "torn')
+    summary = run_bench(config, log=lambda m: None)
+    after = _log_lines(config)
+    assert summary.tasks == total and summary.cached == len(before)
+    assert summary.run == total - len(before)
+    assert after[: len(before)] == before and len(after) == total
+    assert all(json.loads(line)["status"] == "feasible" for line in after if "t-slow" in line)
+
+
+def test_failing_and_hanging_solvers_become_rows(tmp_path, monkeypatch):
+    """A solver that raises gives 'failed' rows, one that hangs is killed ('time_limit'), one that
+    cannot be built gives 'failed' rows that are not logged; the other solvers' rows are fine."""
+    monkeypatch.setattr(runner, "HARD_LIMIT_GRACE_S", 0.5)
+    config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=2,
+                     solvers="greedy,t-crash,t-hang,t-missing", time_limit=0.2, jobs=2)
+    summary = run_bench(config, log=lambda m: None)
+    df = pd.read_csv(tmp_path / "out" / "ratio-k.csv")
+    by = {s: g for s, g in df.groupby("solver")}
+    assert (by["greedy"]["status"] == "feasible").all()
+    assert (by["t-crash"]["status"] == "failed").all()
+    assert by["t-crash"]["note"].str.contains("RuntimeError: boom").all()
+    assert by["t-crash"]["objective"].isna().all()
+    assert (by["t-hang"]["status"] == "time_limit").all()
+    assert by["t-hang"]["note"].str.contains("killed: no answer after").all()
+    assert (by["t-missing"]["status"] == "failed").all()
+    assert by["t-missing"]["note"].str.contains("could not be built").all()
+    logged = {json.loads(line)["solver"] for line in _log_lines(config)}
+    assert "t-missing" not in logged and {"t-crash", "t-hang", "greedy"} <= logged
+    assert summary.failed == len(by["t-crash"]) + len(by["t-missing"])
+
+
+def test_highspy_ortools_torch_solvers_share_a_run(tmp_path):
+    """Solvers importing highspy, ortools and torch run in one bench (never in one process),
+    torch with one thread; a reference that is not optimal leaves every ratio empty, with a note."""
+    config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=1,
+                     solvers="t-highs,t-ortools,t-torch", reference="t-fixed")
+    run_bench(config, log=lambda m: None)
+    df = pd.read_csv(tmp_path / "out" / "ratio-k.csv")
+    assert set(df["solver"]) == {"t-highs", "t-ortools", "t-torch", "t-fixed"}
+    assert (df["status"] == "feasible").all(), df["note"].tolist()
+    assert df["ratio"].isna().all() and df["optimum"].isna().all()
+    assert df["note"].str.contains(r"reference t-fixed not optimal \(feasible\)").all()
+    stats = {json.loads(line)["solver"]: json.loads(line)["stats"] for line in _log_lines(config)}
+    assert stats["t-torch"] == {"module": "torch", "torch_threads": 1}
+    assert stats["t-highs"]["module"] == "highspy"
+
+
+def test_instance_sets_are_reused_and_checked(tmp_path, capsys):
+    """Instance files are written once and re-read; a file with other generator settings is an
+    error, a file with changed coordinates is used with a warning."""
+    config = _config(tmp_path, ks="3")
+    first = runner.load_instance_set(config, 3, 2)
+    path = first[1].path
+    assert path.exists() and path.parent.name == "uav-K3-N4-s1"
+    assert runner.load_instance_set(config, 3, 2)[1].fingerprint == first[1].fingerprint
+    data = json.loads(path.read_text())
+    data["clusters"][0][0] = [1.0, 2.0]
+    path.write_text(json.dumps(data))
+    changed = runner.load_instance_set(config, 3, 2)[1]
+    assert changed.instance.clusters[0][0].tolist() == [1.0, 2.0]
+    assert changed.fingerprint != first[1].fingerprint
+    assert "differs from what the generator gives now" in capsys.readouterr().err
+    data["meta"]["generator"]["n_nodes"] = 9
+    path.write_text(json.dumps(data))
+    with pytest.raises(InputError, match="generator settings"):
+        runner.load_instance_set(config, 3, 2)
+
+
+def test_task_log_drops_torn_line(tmp_path):
+    """A torn last line is cut off; later appends start on a fresh line; the last record wins."""
+    log = TaskLog(tmp_path / "runs.jsonl")
+    log.append({"key": "a", "v": 1})
+    log.append({"key": "b", "v": 1})
+    log.close()
+    with open(log.path, "a") as f:
+        f.write('{"key": "c", "v"')
+    assert set(log.load()) == {"a", "b"}
+    log.append({"key": "a", "v": 2})
+    log.close()
+    records = log.load()
+    assert records["a"]["v"] == 2 and len(log.path.read_text().splitlines()) == 3
