@@ -60,7 +60,6 @@ def exact_optima(instances, ks) -> dict[tuple[str, float], float]:
         if (i + 1) % 50 == 0 or i + 1 == len(missing):
             print(f"exact optima: {i + 1}/{len(missing)}", file=sys.stderr)
     if missing:
-        print(file=sys.stderr)
         lines = ["instance,omega,optimum"] + [f"{n},{w},{v!r}" for (n, w), v in sorted(known.items())]
         atomic_write_text(CACHE, "\n".join(lines) + "\n")
     return known
@@ -84,6 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--k", default="4,7,10", help="cluster counts (default: 4,7,10)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per cell (median)")
+    parser.add_argument("--only", help="comma-separated solver labels' prefixes to run (default: all)")
     parser.add_argument("--csv", help="also write the rows here")
     args = parser.parse_args(argv)
     ks = [int(k) for k in args.k.split(",")]
@@ -93,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     header = f"{'solver':<26} {'K':>3} {'omega':>5} {'mean gap %':>10} {'max gap %':>9} {'ms/inst':>8}"
     print(header)
     print("-" * len(header))
-    for label, name, options in SOLVERS:
+    chosen = [s for s in SOLVERS if not args.only
+              or any(s[0].startswith(p) for p in args.only.split(","))]
+    for label, name, options in chosen:
         solver = get_solver(name, **options)
         for k in ks:
             for w in OMEGAS:
