@@ -8,7 +8,7 @@ K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
 
-.PHONY: install test lint bench bench-quick clean
+.PHONY: install test lint bench bench-quick bench-heuristics clean
 
 install: $(STAMP)
 
@@ -31,6 +31,10 @@ bench: $(STAMP)
 
 bench-quick: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --quick $(BENCH_ARGS)
+
+# Heuristics side by side (benchmarks/heuristics.py); QUICK=1 for a subset.
+bench-heuristics: $(STAMP)
+	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -13,6 +13,16 @@ register_solver("brute", "solvers.brute:Brute",
 register_solver("dp", "solvers.dp:DynamicProgramming",
                 "Held-Karp DP over (visited clusters, last node): exact, fast up to K ~ 12",
                 bench=False)
+register_solver("aco", "solvers.aco:Aco",
+                "paper's ACO baseline (Yang et al. 2008 ant system; 30 ants, 200 iterations)")
+register_solver("aco+ls", "solvers.aco:AcoLS", "aco, then the shared 2-opt/or-opt/heads local search")
+register_solver("greedy+ls", "solvers.local_search:GreedyLS",
+                "greedy, then the shared 2-opt/or-opt/heads local search")
+register_solver("lns", "solvers.lns:Lns",
+                "GLNS-style large neighbourhood search + local search (seeded, time-limited)")
+register_solver("pyvrp", "solvers.pyvrp_peer:PyVRPPeer",
+                "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
+                bench=False)
 register_solver("drl", "solvers.drl:DRL",
                 "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule")
 register_solver("drl-sample", "solvers.drl:DRLSample",

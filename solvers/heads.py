@@ -3,7 +3,7 @@
 For a fixed visiting order, choosing the heads is a shortest path
 depot -> layer(order[0]) -> ... -> layer(order[-1]) -> depot, where crossing node v costs its node
 cost and each edge its edge cost: O(K N^2). Without a depot the tour is a cycle, solved for every
-start node of the first cluster at once. Any solver can use it to improve a tour.
+start node of the smallest cluster at once. Any solver can use it to improve a tour.
 """
 
 from __future__ import annotations
@@ -33,6 +33,9 @@ def optimal_heads(problem: Problem, order: Sequence[int]) -> tuple[np.ndarray, f
         Its cost (node costs + edge costs), as :meth:`Problem.tour_cost` computes it.
     """
     layers = [problem.clusters[int(c)] for c in order]
+    if problem.depot is None and layers:  # a cycle: start at its smallest cluster (fewest starts)
+        first = min(range(len(layers)), key=lambda i: len(layers[i]))
+        layers = layers[first:] + layers[:first]
     edge, node = problem.edge_cost, problem.node_cost
     if problem.depot is not None:
         starts = np.array([problem.depot])
@@ -45,12 +48,11 @@ def optimal_heads(problem: Problem, order: Sequence[int]) -> tuple[np.ndarray, f
     prev = starts
     back = []
     for layer in layers:
-        step = cost[:, :, None] + edge[np.ix_(prev, layer)][None, :, :]  # (S, prev, layer)
-        arg = step.argmin(axis=1)
-        cost = np.take_along_axis(step, arg[:, None, :], axis=1)[:, 0, :] + node[layer][None, :]
-        back.append(arg)
+        step = cost[:, :, None] + edge[prev[:, None], layer[None, :]]  # (S, prev, layer)
+        back.append(step.argmin(axis=1))
+        cost = step.min(axis=1) + node[layer]
         prev = layer
-    closing = cost + edge[np.ix_(starts, prev)]  # return to the start
+    closing = cost + edge[starts[:, None], prev[None, :]]  # return to the start
     s, j = np.unravel_index(int(np.argmin(closing)), closing.shape)
     best = float(closing[s, j])
     path = []

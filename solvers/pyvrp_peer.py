@@ -1,0 +1,146 @@
+"""PyVRP (hybrid genetic search / iterated local search for VRPs) as an outside peer.
+
+The GTSP becomes a one-vehicle VRP with **mutually exclusive client groups**: every node is an
+optional client, the nodes of a cluster form one required group (PyVRP visits exactly one client
+of each required group). Node costs are folded into the edges, half of each end's node cost on
+every edge (a tour uses two edges at every node, so its folded length is exactly its cost), and
+the folded costs are scaled to integers: by 1 when they are all whole numbers (GTSPLIB), else so
+that the largest is about ``resolution``. The answer is mapped back and priced exactly.
+
+PyVRP needs a depot. A UAV instance has one. A ``.gtsp`` file has none: one node of its smallest
+cluster is made the depot and the other clusters become groups; when that cluster has several nodes
+PyVRP runs once per node (the time limit shared among the runs) and the best tour is kept, so the
+model stays exact. (GTSPLIB files all have a one-node cluster: a single run.)
+
+PyVRP is an optional extra (``make install`` installs it); without it this solver raises a clear
+:class:`InputError`. It imports fine in one process together with highspy or ortools.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from gtsp_bench.errors import InputError, SolverError
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
+from gtsp_bench.registry import Solution, check_time_limit
+from solvers.options import check_float, check_int, default_time_limit
+
+#: Integer scale target: the largest folded edge cost becomes about this many units.
+RESOLUTION = 1e7
+#: Largest cost that is used as is when all folded costs are whole numbers.
+MAX_EXACT = 2**40
+
+
+def _import_pyvrp():
+    try:
+        import pyvrp
+        import pyvrp.stop
+    except ImportError as e:
+        raise InputError(
+            f"solver 'pyvrp' needs the optional package pyvrp ({e}); install it with "
+            "'make install' or pip install 'gtsp-bench[pyvrp]'"
+        ) from None
+    return pyvrp
+
+
+def folded_costs(problem: Problem, resolution: float = RESOLUTION) -> tuple[np.ndarray, float]:
+    """Integer edge costs with the node costs folded in, and the scale used.
+
+    ``out[i, j] = round(scale * (edge(i, j) + (node(i) + node(j)) / 2))`` off the diagonal, 0 on it.
+    """
+    cost = problem.edge_cost + 0.5 * (problem.node_cost[:, None] + problem.node_cost[None, :])
+    np.fill_diagonal(cost, 0.0)
+    top = float(cost.max()) if cost.size else 0.0
+    if np.all(cost == np.round(cost)) and top <= MAX_EXACT:
+        scale = 1.0
+    else:
+        scale = resolution / top if top > 0 else 1.0
+    return np.round(cost * scale).astype(np.int64), scale
+
+
+class PyVRPPeer:
+    """PyVRP on the GTSP as a one-vehicle VRP with client groups (see the module docstring).
+
+    Parameters
+    ----------
+    no_improvement
+        Stop after this many PyVRP iterations without a better solution (>= 1); the time limit
+        stops it too (status ``time_limit``).
+    resolution
+        The largest folded edge cost becomes about this many integer units (> 0), unless the
+        costs are already whole numbers.
+    """
+
+    def __init__(self, no_improvement: int = 2_000, resolution: float = RESOLUTION) -> None:
+        self.no_improvement = check_int("no_improvement", no_improvement, 1)
+        self.resolution = check_float("resolution", resolution, 0.0, float(MAX_EXACT))
+
+    def solve(
+        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
+        seed: int = 0,
+    ) -> Solution:
+        """Run PyVRP (once per node of the smallest cluster when there is no depot)."""
+        pyvrp = _import_pyvrp()
+        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        start = time.perf_counter()
+        problem = price(instance, omega)
+        cost, scale = folded_costs(problem, self.resolution)
+        if problem.depot is not None:
+            depots = [problem.depot]
+        else:
+            depots = [int(v) for v in min(problem.clusters, key=len)]
+        best, best_cost, timed_out, iterations = None, np.inf, False, 0
+        for n_done, depot in enumerate(depots):
+            left = time_limit - (time.perf_counter() - start)
+            budget = left / (len(depots) - n_done)
+            if budget <= 0:
+                timed_out = True
+                break
+            tour, its, hit = self._run(pyvrp, problem, cost, depot, budget, seed)
+            iterations += its
+            timed_out |= hit
+            c = problem.tour_cost(tour)
+            if c < best_cost:
+                best, best_cost = tour, c
+        if best is None:  # not even one run fitted: a tour is still owed
+            best = self._run(pyvrp, problem, cost, depots[0], 1e-3, seed)[0]
+            best_cost = problem.tour_cost(best)
+        order, heads = problem.to_solution(best)
+        return Solution(order, heads, objective=best_cost,
+                        status="time_limit" if timed_out else "feasible",
+                        stats={"iterations": iterations, "scale": scale, "runs": len(depots)})
+
+    def _run(
+        self, pyvrp, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int
+    ) -> tuple[np.ndarray, int, bool]:
+        """One PyVRP run with ``depot`` as the depot: (tour, iterations, stopped by time)."""
+        depot_cluster = int(problem.cluster_of[depot])
+        others = [c for c in range(problem.n_clusters) if c != depot_cluster]
+        if not others:  # a single cluster and no depot: the tour is the node itself
+            return np.array([depot]), 0, False
+        nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
+        locations = [pyvrp.Location(0.0, 0.0) for _ in nodes]  # coordinates unused: matrix given
+        clients, groups = [], []
+        for g, c in enumerate(others):
+            first = len(clients)
+            clients += [pyvrp.Client(location=first + i + 1, required=False, group=g)
+                        for i in range(len(problem.clusters[c]))]
+            groups.append(pyvrp.ClientGroup(list(range(first, len(clients))), required=True))
+        distances = np.ascontiguousarray(cost[np.ix_(nodes, nodes)])
+        data = pyvrp.ProblemData(
+            locations, clients, [pyvrp.Depot(location=0)], [pyvrp.VehicleType(1)],
+            [distances], [np.zeros_like(distances)], groups,
+        )
+        stop = pyvrp.stop.MultipleCriteria([
+            pyvrp.stop.MaxRuntime(seconds), pyvrp.stop.NoImprovement(self.no_improvement),
+        ])
+        result = pyvrp.solve(data, stop, seed=seed, collect_stats=False, display=False)
+        if not result.is_feasible() or len(result.best.routes()) != 1:
+            raise SolverError(f"PyVRP found no feasible tour on {problem.instance.name}")
+        visits = [1 + a.idx for a in result.best.routes()[0]
+                  if a.type == pyvrp.ActivityType.CLIENT]
+        tour = nodes[[0, *visits]]
+        return tour, int(result.num_iterations), result.runtime >= seconds * 0.99

@@ -1,0 +1,103 @@
+"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, options."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.io import read_instance
+from gtsp_bench.registry import get_solver, run_solver
+from solvers.lns import LnsSettings
+
+from .conftest import GTSPLIB
+from .tiny_cases import tiny_case
+
+
+@pytest.mark.parametrize("depot", [True, False])
+def test_finds_most_brute_force_optima(depot):
+    """With its defaults, lns matches brute force on most tiny instances, never goes below."""
+    hits = 0
+    for seed in range(10):
+        inst, omega, optimum = tiny_case(seed, depot)
+        r = run_solver("lns", inst, omega, seed=seed)
+        assert r.status == "feasible"
+        assert r.objective >= optimum - 1e-9
+        hits += r.objective <= optimum + 1e-9 * optimum
+    assert hits >= 9
+
+
+def test_matches_brute_force_on_k7():
+    """A K = 7 instance with 3 nodes per cluster (11 million tours): lns finds the optimum."""
+    inst = generate_instance(7, 3, seed=5)
+    optimum = run_solver("brute", inst, 0.3).objective
+    assert run_solver("lns", inst, 0.3).objective == pytest.approx(optimum, rel=1e-9)
+
+
+def test_seed_reproduces_the_run():
+    """Without a binding time limit the same seed gives the same result and iteration count."""
+    inst = generate_instance(9, 5, seed=1)
+    solver = get_solver("lns", iterations=60, trials=2)
+    a = run_solver(solver, inst, 0.7, seed=3, time_limit=60)
+    b = run_solver(solver, inst, 0.7, seed=3, time_limit=60)
+    assert (a.order, a.heads, a.objective, a.stats["iterations"]) == \
+        (b.order, b.heads, b.objective, b.stats["iterations"])
+
+
+def test_time_limit_returns_best_tour():
+    """A tiny limit still gives a feasible tour, with status time_limit."""
+    inst = generate_instance(15, 10, seed=0)
+    r = run_solver("lns", inst, 0.5, time_limit=1e-6)
+    assert r.status == "time_limit"
+    assert sorted(r.order) == list(range(15))
+
+
+def test_gtsplib_file():
+    """On 11berlin52 (no depot) a short run reaches the proven optimum 4040."""
+    r = run_solver(get_solver("lns", iterations=100, trials=1), read_instance(GTSPLIB / "11berlin52.gtsp"),
+                   None)
+    assert sorted(r.order) == list(range(11))
+    assert r.objective == 4040
+
+
+@pytest.mark.parametrize("k, depot", [(1, True), (1, False), (2, True), (2, False), (3, False)])
+def test_very_small_instances(k, depot):
+    """One to three clusters, with or without a depot, are solved exactly."""
+    base = generate_instance(k, 4, seed=k)
+    inst = base if depot else Instance(name="nd", clusters=base.clusters)
+    r = run_solver("lns", inst, 0.5)
+    assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-12)
+
+
+def test_operators_are_all_used():
+    """Every removal and insertion operator keeps a positive weight (none is switched off)."""
+    r = run_solver(get_solver("lns", iterations=80, trials=1), generate_instance(8, 4, seed=0), 0.5)
+    assert set(r.stats["weights"]) == {"random", "worst", "segment", "cheapest", "randomised"}
+    assert all(w > 0 for w in r.stats["weights"].values())
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"iterations": 0}, "iterations must be an integer >= 1"),
+    ({"trials": 0}, "trials must be an integer >= 1"),
+    ({"patience": -3}, "patience"),
+    ({"remove_fraction": 0}, "remove_fraction"),
+    ({"remove_fraction": 1.2}, "remove_fraction"),
+    ({"start_temperature": -1}, "start_temperature"),
+    ({"start_temperature": 0.01, "end_temperature": 0.1}, "must not exceed"),
+    ({"reaction": 0}, "reaction"),
+    ({"noise": float("inf")}, "noise"),
+])
+def test_bad_options_rejected(options, message):
+    """Invalid settings raise InputError naming the setting."""
+    with pytest.raises(InputError, match=message):
+        get_solver("lns", **options)
+
+
+def test_default_budget_scales_with_size():
+    """Default iterations per trial and patience grow with the number of clusters."""
+    s = LnsSettings()
+    assert s.iterations_for(4) == 100 and s.iterations_for(41) == 1025
+    assert s.patience_for(4) == 50 and s.patience_for(41) == 205
+    assert np.all(np.diff([s.iterations_for(n) for n in range(1, 200)]) >= 0)

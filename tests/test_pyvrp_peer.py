@@ -1,0 +1,108 @@
+"""The PyVRP peer: exact cost folding, feasible tours at the optimum, no depot, missing package."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
+from gtsp_bench.registry import get_solver, run_solver
+from solvers.pyvrp_peer import folded_costs
+
+from .conftest import GTSPLIB
+from .tiny_cases import tiny_case
+
+pytest.importorskip("pyvrp")
+
+FAST = {"no_improvement": 300}
+
+
+def test_folded_costs_price_tours_exactly():
+    """Half of each end's node cost on every edge: a tour's folded sum is its cost (scaled)."""
+    inst = generate_instance(5, 4, seed=0)
+    problem = price(inst, 0.6)
+    cost, scale = folded_costs(problem)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        tour = np.array([problem.depot] + [rng.choice(c) for c in problem.clusters[:-1]])
+        folded = cost[tour, np.roll(tour, -1)].sum() / scale
+        assert folded == pytest.approx(problem.tour_cost(tour), rel=1e-6)
+    assert cost.dtype == np.int64 and 0.9e7 <= cost.max() <= 1.1e7
+
+
+def test_whole_number_costs_are_not_scaled():
+    """GTSPLIB weights are integers: they are used as they are."""
+    problem = price(read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    cost, scale = folded_costs(problem)
+    assert scale == 1.0
+    assert np.array_equal(cost, problem.edge_cost.astype(np.int64))
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("depot", [True, False])
+def test_feasible_and_at_the_optimum(seed, depot):
+    """On tiny instances PyVRP's tour is feasible, never below brute force, and matches it."""
+    inst, omega, optimum = tiny_case(seed, depot)
+    r = run_solver(get_solver("pyvrp", **FAST), inst, omega, seed=seed)
+    assert r.status == "feasible"
+    assert r.objective >= optimum - 1e-9
+    assert r.objective == pytest.approx(optimum, rel=1e-6)
+
+
+def test_no_depot_runs_once_per_node_of_the_smallest_cluster():
+    """Without a depot and no one-node cluster, each node of the smallest cluster is tried."""
+    base = generate_instance(4, 3, seed=4)
+    inst = Instance(name="nd", clusters=base.clusters)
+    r = run_solver(get_solver("pyvrp", **FAST), inst, 0.5)
+    assert r.stats["runs"] == 3
+    assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-6)
+
+
+def test_single_cluster_without_depot():
+    """One cluster and no depot: the cheapest node alone."""
+    base = generate_instance(1, 5, seed=0)
+    inst = Instance(name="one", clusters=base.clusters)
+    r = run_solver(get_solver("pyvrp", **FAST), inst, 0.5)
+    assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-12)
+
+
+def test_gtsplib_file():
+    """On 11berlin52 PyVRP reaches the proven optimum 4040."""
+    r = run_solver(get_solver("pyvrp", **FAST), read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    assert r.objective == 4040
+
+
+def test_time_limit_status():
+    """A short limit stops PyVRP with a feasible tour and status time_limit."""
+    r = run_solver(get_solver("pyvrp", no_improvement=10**9), generate_instance(10, 5, seed=0), 0.5,
+                   time_limit=0.05)
+    assert r.status == "time_limit"
+    assert sorted(r.order) == list(range(10))
+
+
+def test_seed_reproduces_the_run():
+    """With the stall criterion stopping it, the same seed gives the same tour."""
+    inst = generate_instance(12, 5, seed=1)
+    a = run_solver(get_solver("pyvrp", **FAST), inst, 0.5, seed=2, time_limit=60)
+    b = run_solver(get_solver("pyvrp", **FAST), inst, 0.5, seed=2, time_limit=60)
+    assert (a.order, a.heads, a.stats["iterations"]) == (b.order, b.heads, b.stats["iterations"])
+
+
+def test_missing_package_is_a_clear_error(monkeypatch):
+    """Without pyvrp installed the solver raises InputError saying how to install it."""
+    monkeypatch.setitem(sys.modules, "pyvrp", None)
+    with pytest.raises(InputError, match="needs the optional package pyvrp"):
+        run_solver("pyvrp", generate_instance(3, 3, seed=0), 0.5)
+
+
+@pytest.mark.parametrize("options", [{"no_improvement": 0}, {"resolution": -1.0}])
+def test_bad_options_rejected(options):
+    """Invalid options raise InputError."""
+    with pytest.raises(InputError):
+        get_solver("pyvrp", **options)
