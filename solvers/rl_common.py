@@ -37,6 +37,7 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.io import atomic_write_bytes
 from gtsp_bench.params import EnergyParams
 from gtsp_bench.registry import Solution
+from solvers.options import check_int
 
 #: Coordinates are divided by this (m) before they enter a model.
 AREA_SCALE = 1000.0
@@ -416,10 +417,8 @@ class LearnedSolver:
         heads = heads or self.default_heads
         if heads not in HEAD_RULES:
             raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {heads!r}")
-        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 0:
-            raise InputError(f"samples must be an integer >= 0, got {samples!r}")
-        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-            raise InputError(f"threads must be an integer >= 1, got {threads!r}")
+        samples = check_int("samples", samples, 0)
+        threads = check_int("threads", threads, 1)
         self.checkpoint = Path(checkpoint) if checkpoint else CHECKPOINT_DIR / f"{self.model_name}.pt"
         self.heads = heads
         self.samples = samples

@@ -34,9 +34,11 @@ import numpy as np
 import torch
 from torch import nn
 
+from gtsp_bench.energy import check_omega
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import check_generator_args, generate_batch
 from gtsp_bench.io import atomic_write_bytes, atomic_write_text
+from solvers.options import check_float, check_int
 from solvers.rl_common import (
     COST_SCALE,
     HEAD_RULES,
@@ -87,13 +89,10 @@ class TrainConfig:
         if self.clusters < 2:
             raise InputError("training needs at least 2 clusters")
         for name in ("steps", "batch", "val_every", "val_size", "log_every", "threads"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise InputError(f"{name} must be an integer >= 1, got {v!r}")
-        if not (self.lr > 0 and math.isfinite(self.lr)):
-            raise InputError(f"learning rate must be > 0, got {self.lr!r}")
-        if self.omega is not None and not 0 <= self.omega <= 1:
-            raise InputError(f"omega must be in [0, 1], got {self.omega!r}")
+            check_int(name, getattr(self, name), 1)
+        check_float("learning rate", self.lr, 0.0, math.inf)
+        if self.omega is not None:
+            check_omega(self.omega)
         if self.heads is not None and self.heads not in HEAD_RULES:
             raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {self.heads!r}")
         if self.max_time is not None and not self.max_time > 0:
