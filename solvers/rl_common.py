@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import json
 import math
 import time
 from collections.abc import Sequence
@@ -89,10 +88,16 @@ class EnvBatch:
         b, k, n, _ = self.coords.shape
         return b, k, n
 
+    def _tensors(self) -> tuple[torch.Tensor, ...]:
+        return (self.coords, self.depot, self.omega, self.node_cost, self.ground, self.edge_per_m)
+
+    def rows(self, start: int, stop: int) -> EnvBatch:
+        """Instances ``start .. stop - 1``."""
+        return EnvBatch(*(t[start:stop] for t in self._tensors()))
+
     def repeat(self, times: int) -> EnvBatch:
         """Each instance ``times`` times in a row (instance i becomes rows i*times .. )."""
-        return EnvBatch(*(t.repeat_interleave(times, dim=0) for t in (
-            self.coords, self.depot, self.omega, self.node_cost, self.ground, self.edge_per_m)))
+        return EnvBatch(*(t.repeat_interleave(times, dim=0) for t in self._tensors()))
 
 
 def make_env(
@@ -287,8 +292,7 @@ def exact_by_enumeration(env: EnvBatch, chunk: int = 1 << 16) -> torch.Tensor:
     best = torch.full((b,), math.inf, dtype=torch.float64)
     per = max(1, chunk // len(perms))
     for i in range(0, b, per):
-        sub = EnvBatch(*(t[i:i + per] for t in (env.coords, env.depot, env.omega, env.node_cost,
-                                                  env.ground, env.edge_per_m)))
+        sub = env.rows(i, i + per)
         m = sub.shape[0]
         rep = sub.repeat(len(perms))
         _, cost = optimal_heads_batch(rep, perms.repeat(m, 1))
@@ -484,11 +488,3 @@ class LearnedSolver:
         if omega is None:
             raise InputError(f"{instance.name}: learned policies need a UAV instance and omega")
         return self.solve_batch([instance], [omega], seed=seed)[0]
-
-
-def read_json(path: Path) -> dict[str, Any]:
-    """Read a small JSON file, or an empty dict when missing."""
-    try:
-        return json.loads(path.read_text())
-    except FileNotFoundError:
-        return {}

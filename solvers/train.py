@@ -149,7 +149,7 @@ def greedy_cost(model: nn.Module, env: EnvBatch, rule: str, chunk: int = 256) ->
     b = env.shape[0]
     with torch.inference_mode():
         for i in range(0, b, chunk):
-            sub = EnvBatch(*(t[i:i + chunk] for t in dataclasses.astuple(env)))
+            sub = env.rows(i, i + chunk)
             order, _ = model.decode(sub, "greedy")
             m = sub.shape[0]
             rep = sub.repeat(order.shape[0] // m)
