@@ -19,7 +19,7 @@ from typing import Any
 import torch
 from torch import nn
 
-from solvers.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, element_features, mask_logits, pick
+from solvers.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, choose, element_features
 
 
 class AttentionPolicy(nn.Module):
@@ -111,12 +111,8 @@ class AttentionPolicy(nn.Module):
                 w = env.omega[inst].float()[:, None].expand(r, m)
                 feats = torch.stack([dist[inst, act], dist[inst, 0], w], dim=-1)  # (R, M, 3)
                 logits = logits + self.local(feats).squeeze(-1)
-            logits = mask_logits(logits, visited)
-            logprob = torch.log_softmax(logits, -1)
-            act = pick(logits, mode, generator)
-            logp = logp + logprob[rows, act]
-            visited = visited.clone()
-            visited[rows, act] = True
+            act, step_logp, visited = choose(logits, visited, mode, generator)
+            logp = logp + step_logp
             actions.append(act)
         return torch.stack(actions, 1) - 1, logp
 

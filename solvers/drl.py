@@ -20,7 +20,7 @@ import torch
 from torch import nn
 
 from gtsp_bench.errors import InputError
-from solvers.rl_common import EnvBatch, LearnedSolver, element_features, mask_logits, pick
+from solvers.rl_common import EnvBatch, LearnedSolver, choose, element_features
 
 
 class _Embedding(nn.Module):
@@ -107,12 +107,9 @@ class PointerPolicy(nn.Module):
             h, c = self.lstm(x, (h, c))
             a = torch.softmax(self.v_a(torch.tanh(k1 + self.w2(h)[:, None])).squeeze(-1), dim=-1)
             g = (a[..., None] * e).sum(1)
-            logits = mask_logits(self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1), visited)
-            logprob = torch.log_softmax(logits, -1)
-            act = pick(logits, mode, generator)
-            logp = logp + logprob[rows, act]
-            visited = visited.clone()
-            visited[rows, act] = True
+            logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
+            act, step_logp, visited = choose(logits, visited, mode, generator)
+            logp = logp + step_logp
             actions.append(act)
             x = e[rows, act]
         return torch.stack(actions, 1) - 1, logp

@@ -316,17 +316,32 @@ def element_features(env: EnvBatch) -> tuple[torch.Tensor, torch.Tensor]:
     return nodes, depot
 
 
-def pick(logits: torch.Tensor, mode: str, generator: torch.Generator | None) -> torch.Tensor:
-    """Greedy (argmax) or sampled action from masked logits ``(B, M)``."""
+def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
+           generator: torch.Generator | None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """One decoding step from raw logits ``(R, M)``.
+
+    The logits are clipped to C_L tanh(.), visited elements set to -inf, then the action is the
+    argmax (``mode="greedy"``) or a sample.
+
+    Returns
+    -------
+    action : torch.Tensor
+        ``(R,)`` chosen elements.
+    logp : torch.Tensor
+        ``(R,)`` their log-probabilities.
+    visited : torch.Tensor
+        The new visited mask (a copy; autograd needs the old one).
+    """
+    logits = (CLIP * torch.tanh(logits)).masked_fill(visited, -math.inf)
+    logprob = torch.log_softmax(logits, -1)
     if mode == "greedy":
-        return logits.argmax(-1)
-    probs = torch.softmax(logits, -1)
-    return torch.multinomial(probs, 1, generator=generator)[:, 0]
-
-
-def mask_logits(logits: torch.Tensor, visited: torch.Tensor) -> torch.Tensor:
-    """Clip logits to C_L tanh(.) and set visited elements to -inf."""
-    return (CLIP * torch.tanh(logits)).masked_fill(visited, -math.inf)
+        action = logits.argmax(-1)
+    else:
+        action = torch.multinomial(logprob.exp(), 1, generator=generator)[:, 0]
+    rows = torch.arange(len(action))
+    visited = visited.clone()
+    visited[rows, action] = True
+    return action, logprob[rows, action], visited
 
 
 # ---------------------------------------------------------------------- checkpoints
