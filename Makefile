@@ -36,5 +36,9 @@ bench-quick: $(STAMP)
 bench-heuristics: $(STAMP)
 	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
 
+# Learned policies against the exact optimum (issue 5's figures).
+bench-drl: $(STAMP)
+	PYTHONPATH=. $(BIN)/python benchmarks/drl.py
+
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -41,6 +41,7 @@ SOLVERS = (
     ("drl-sample heads=optimal", "drl-sample", {"heads": "optimal"}),
     ("am", "am", {}),
     ("am heads=paper", "am", {"heads": "paper"}),
+    ("am augment=true", "am", {"augment": True}),
 )
 
 
