@@ -120,3 +120,17 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     assert steps == sorted(set(steps)) and steps[-1] == saved + 10
     meta = json.loads(output_paths(out)["meta"].read_text())
     assert meta["steps_trained"] == saved + 10
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--steps", "0"], "steps must be an integer >= 1"),
+    (["--clusters", "1"], "at least 2 clusters"),
+    (["--omega", "1.5"], "omega must be in [0, 1]"),
+    (["--lr", "-1"], "learning rate must be a number"),
+])
+def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
+    """Bad training settings: exit 2 with one line, and no file written."""
+    code = main(["train", *args, "--no-progress", "-o", str(tmp_path / "x.pt")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
