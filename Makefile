@@ -36,6 +36,10 @@ bench-quick: $(STAMP)
 bench-heuristics: $(STAMP)
 	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
 
+# Learned policies against the exact optimum (issue 5's figures).
+bench-drl: $(STAMP)
+	PYTHONPATH=. $(BIN)/python benchmarks/drl.py
+
 # Exact solvers side by side (benchmarks/exact.py); QUICK=1 for a subset.
 bench-exact: $(STAMP)
 	$(BIN)/python benchmarks/exact.py $(if $(QUICK),--quick)

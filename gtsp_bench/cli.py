@@ -125,6 +125,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
     p.set_defaults(handler=_cmd_evaluate)
 
+    p = sub.add_parser("train", help="train a learned policy (drl, am) on generated instances",
+                       description="Train a learned policy by REINFORCE on instances drawn fresh "
+                       "from the generator; writes CKPT, CKPT.json, CKPT.train.csv and the resume "
+                       "state CKPT.state.pt (see solvers/train.py).")
+    p.add_argument("--model", choices=("drl", "am"), default="drl",
+                   help="drl: the paper's Seq2Seq policy; am: attention model (default: drl)")
+    p.add_argument("--clusters", "-k", type=_int, default=4, metavar="K", help="K (default: 4)")
+    p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N", help="N (default: 20)")
+    p.add_argument("--steps", type=_int, default=40_000, help="training steps (default: 40000)")
+    p.add_argument("--batch", type=_int, default=256, help="instances per step (default: 256)")
+    p.add_argument("--lr", type=_float, default=1e-4, help="Adam learning rate (default: 1e-4)")
+    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--omega", "-w", type=_float, default=None, metavar="W",
+                   help="train for one omega (default: omega uniform in [0, 1] per instance)")
+    p.add_argument("--heads", choices=("paper", "optimal"), default=None,
+                   help="head rule in the reward (default: paper for drl, optimal for am)")
+    p.add_argument("--val-every", type=_int, default=250, metavar="S",
+                   help="validate and checkpoint every S steps (default: 250)")
+    p.add_argument("--val-size", type=_int, default=512, metavar="M",
+                   help="validation instances (default: 512)")
+    p.add_argument("--threads", type=_int, default=1, help="torch threads (default: 1)")
+    p.add_argument("--max-time", type=_float, default=None, metavar="S",
+                   help="stop after S seconds of training wall time")
+    p.add_argument("--keep", choices=("best", "last"), default="best",
+                   help="policy kept in CKPT: best validation energy or the last (default: best)")
+    p.add_argument("--resume", action="store_true", help="continue from CKPT.state.pt")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("-o", "--output", required=True, metavar="CKPT.pt", help="policy file to write")
+    p.set_defaults(handler=_cmd_train)
+
     p = sub.add_parser("bench", help="regenerate the paper's tables and figures (CSV, PNG)",
                        description="Run the paper's experiments (ratio-omega, ratio-k, runtime, "
                        "trajectories, training) over seeded instance sets in parallel; write "
@@ -218,6 +248,22 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         runtime_s=time.perf_counter() - start,
     )
     print(json.dumps(result.to_dict()) if args.json else result.summary())
+    return 0
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    import math
+
+    from solvers.train import TrainConfig, train
+
+    cfg = TrainConfig(model=args.model, clusters=args.clusters, nodes=args.nodes,
+                      steps=args.steps, batch=args.batch, lr=args.lr, seed=args.seed,
+                      omega=args.omega, heads=args.heads, val_every=args.val_every,
+                      val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
+                      threads=args.threads, max_time=args.max_time, keep=args.keep)
+    meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
+    print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
+          f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)
     return 0
 
 

@@ -217,7 +217,10 @@ def check_claims(frames: Mapping[str, pd.DataFrame | None]) -> list[tuple[str, s
         if df is None:
             return "not checked (experiment not run)"
         absent = [n for n in names if n not in set(df["solver"])]
-        return f"not checked ({', '.join(absent)} not run)" if absent else None
+        if absent:
+            return f"not checked ({', '.join(absent)} not run)"
+        failed = [n for n in names if df.loc[df["solver"] == n, "ratio"].isna().all()]
+        return f"not checked ({', '.join(failed)} failed on every solve)" if failed else None
 
     def verdict(ok: bool) -> str:
         return "holds" if ok else "does not hold"

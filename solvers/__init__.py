@@ -23,6 +23,12 @@ register_solver("lns", "solvers.lns:Lns",
 register_solver("pyvrp", "solvers.pyvrp_peer:PyVRPPeer",
                 "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
                 bench=False)
+register_solver("drl", "solvers.drl:DRL",
+                "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule")
+register_solver("drl-sample", "solvers.drl:DRLSample",
+                "paper's policy: best of the greedy and 64 sampled tours", bench=False)
+register_solver("am", "solvers.am:AM",
+                "attention model, best of K greedy POMO starts, optimal heads for the order")
 register_solver("milp", "solvers.milp:Milp",
                 "HiGHS MILP: lifted subtour cuts, pricing, own branch and cut (exact; the reference)",
                 bench=False)

@@ -1,0 +1,140 @@
+"""The paper's policy (section IV): a Seq2Seq pointer network trained by REINFORCE with a critic.
+
+Encoder: one linear embedding per element of C = {b0, G_1, ..., G_K} into D = 128. A cluster is
+the vector of its N node coordinates (scaled to the unit square) plus omega, so the model is tied
+to the N it was trained with (other N: a clear error); the depot has its own embedding of
+(x, y, omega). Omega is an input, so one model serves every omega (the paper trains one model per
+omega). Decoder: an LSTM cell of 128 units fed the embedding of the element chosen last (the depot
+first). Attention (eqs. "u_k" to "u_kp"): u = v_a tanh(W1 e + W2 h), a = softmax(u),
+g = sum a e, logits = v_g tanh(W3 e + W4 g), clipped to C_L tanh(.) with C_L = 10, visited
+elements masked. Heads: the paper's rule (eq. "chselection") by default, or optimal heads for the
+decoded order. The critic: an attention-weighted sum of its own embeddings -> dense + ReLU ->
+dense -> the expected cost (kJ).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from torch import nn
+
+from gtsp_bench.errors import InputError
+from solvers.rl_common import EnvBatch, LearnedSolver, choose, element_features
+
+
+class _Embedding(nn.Module):
+    """Linear embedding of the depot and of each cluster's flattened coordinates (+ omega)."""
+
+    def __init__(self, n_nodes: int, dim: int) -> None:
+        super().__init__()
+        self.n_nodes = n_nodes
+        self.depot = nn.Linear(3, dim)
+        self.cluster = nn.Linear(2 * n_nodes + 1, dim)
+
+    def forward(self, env: EnvBatch) -> torch.Tensor:
+        b, k, n = env.shape
+        if n != self.n_nodes:
+            raise InputError(f"the drl model was trained on clusters of {self.n_nodes} nodes and "
+                             f"cannot embed clusters of {n} (use 'am', which takes any size)")
+        nodes, depot = element_features(env)
+        flat = torch.cat([nodes[..., :2].reshape(b, k, 2 * n), nodes[:, :, 0, 2:3]], dim=-1)
+        return torch.cat([self.depot(depot)[:, None], self.cluster(flat)], dim=1)  # (B, K+1, D)
+
+
+class Critic(nn.Module):
+    """Baseline V(C): attention-weighted sum of embeddings -> two dense layers -> scalar (kJ)."""
+
+    def __init__(self, n_nodes: int, dim: int) -> None:
+        super().__init__()
+        self.embed = _Embedding(n_nodes, dim)
+        self.w = nn.Linear(dim, dim)
+        self.v = nn.Linear(dim, 1, bias=False)
+        self.head = nn.Sequential(nn.Linear(dim, dim), nn.ReLU(), nn.Linear(dim, 1))
+
+    def forward(self, env: EnvBatch) -> torch.Tensor:
+        """Predicted cost ``(B,)`` in kJ."""
+        e = self.embed(env)
+        a = torch.softmax(self.v(torch.tanh(self.w(e))).squeeze(-1), dim=-1)
+        return self.head((a[..., None] * e).sum(1)).squeeze(-1)
+
+
+class PointerPolicy(nn.Module):
+    """The paper's Seq2Seq actor (and its critic, used only in training).
+
+    Parameters
+    ----------
+    n_nodes
+        N, the cluster size it embeds.
+    dim
+        D, embedding and LSTM width (paper: 128).
+    """
+
+    def __init__(self, n_nodes: int = 20, dim: int = 128) -> None:
+        super().__init__()
+        self.config: dict[str, Any] = {"model": "drl", "n_nodes": n_nodes, "dim": dim}
+        self.embed = _Embedding(n_nodes, dim)
+        self.lstm = nn.LSTMCell(dim, dim)
+        self.w1 = nn.Linear(dim, dim, bias=False)
+        self.w2 = nn.Linear(dim, dim)
+        self.v_a = nn.Linear(dim, 1, bias=False)
+        self.w3 = nn.Linear(dim, dim, bias=False)
+        self.w4 = nn.Linear(dim, dim)
+        self.v_g = nn.Linear(dim, 1, bias=False)
+        self.critic = Critic(n_nodes, dim)
+
+    def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Decode a visiting order per instance.
+
+        Returns
+        -------
+        order : torch.Tensor
+            ``(B, K)`` cluster indices (0-based, depot excluded).
+        logp : torch.Tensor
+            ``(B,)`` log-probability of the order under the policy.
+        """
+        e = self.embed(env)
+        b, m, d = e.shape
+        rows = torch.arange(b)
+        visited = torch.zeros((b, m), dtype=torch.bool)
+        visited[:, 0] = True  # pi_0 = b0
+        h = c = e.new_zeros((b, d))
+        x = e[:, 0]
+        k1, k3 = self.w1(e), self.w3(e)
+        actions, logp = [], e.new_zeros(b)
+        for _ in range(m - 1):
+            h, c = self.lstm(x, (h, c))
+            a = torch.softmax(self.v_a(torch.tanh(k1 + self.w2(h)[:, None])).squeeze(-1), dim=-1)
+            g = (a[..., None] * e).sum(1)
+            logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
+            act, step_logp, visited = choose(logits, visited, mode, generator)
+            logp = logp + step_logp
+            actions.append(act)
+            x = e[rows, act]
+        return torch.stack(actions, 1) - 1, logp
+
+
+class DRL(LearnedSolver):
+    """The paper's policy, greedy decoding; heads by the paper's rule (default) or optimal.
+
+    Default checkpoint: ``solvers/checkpoints/drl.pt``. Options: ``checkpoint``, ``heads``
+    (``paper`` | ``optimal``), ``threads``.
+    """
+
+    model_name = "drl"
+    default_heads = "paper"
+
+    def __init__(self, checkpoint: str | None = None, heads: str | None = None, threads: int = 1) -> None:
+        super().__init__(checkpoint, heads, samples=0, threads=threads)
+
+
+class DRLSample(LearnedSolver):
+    """The paper's policy: the best of the greedy tour and ``samples`` sampled tours (default 64)."""
+
+    model_name = "drl"
+    default_heads = "paper"
+
+    def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 64,
+                 threads: int = 1) -> None:
+        super().__init__(checkpoint, heads, samples=samples, threads=threads)

@@ -1,0 +1,371 @@
+"""Training loop of the learned policies (paper Algorithm 1, and POMO for ``am``).
+
+``drl``: REINFORCE with the critic baseline, one Adam per network (lr 1e-4), as the paper.
+``am``: REINFORCE with the POMO shared baseline (the mean cost of an instance's K tours).
+Data are drawn fresh each step from :func:`gtsp_bench.generator.generate_batch`, omega uniform in
+[0, 1] per instance unless fixed, and priced by the shared evaluator's quantities.
+
+Given ``-o CKPT`` (e.g. ``drl.pt``), training writes, atomically:
+
+* ``CKPT``: the policy with the best validation energy so far (``--keep best``, the default) or
+  the latest validated one (``--keep last``), as config + state_dict;
+* ``CKPT.json`` (``drl.json``): command, seed, steps, wall time, validation score, config;
+* ``CKPT.train.csv`` (``drl.train.csv``): the log, columns ``step,loss,reward,val_energy,wall_s``
+  then ``val_gap_pct,critic_loss``; ``loss`` is the actor's loss, ``reward`` the mean -E (J) of
+  the sampled tours since the previous row, ``val_energy`` the mean greedy energy (J) on the
+  fixed validation set;
+* ``CKPT.state.pt`` (``drl.state.pt``): everything needed to resume (weights, optimisers, random
+  states, step, log rows), at every validation. ``--resume`` continues from it.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from gtsp_bench.energy import check_omega
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import check_generator_args, generate_batch
+from gtsp_bench.io import atomic_write_bytes, atomic_write_text
+from solvers.options import check_float, check_int
+from solvers.rl_common import (
+    COST_SCALE,
+    HEAD_RULES,
+    EnvBatch,
+    build_model,
+    choose_heads,
+    exact_by_enumeration,
+    make_env,
+    save_policy,
+    tour_cost,
+)
+
+MODELS = ("drl", "am")
+DEFAULT_HEADS = {"drl": "paper", "am": "optimal"}
+#: Seed of the fixed validation set (never used for training or testing).
+VAL_SEED = 918_273
+#: Validation sets up to this K also get the exact optimum (by enumeration) and a gap column.
+MAX_EXACT_K = 6
+LOG_COLUMNS = ("step", "loss", "reward", "val_energy", "wall_s", "val_gap_pct", "critic_loss")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Settings of one training run (all are recorded in the JSON beside the checkpoint)."""
+
+    model: str = "drl"
+    clusters: int = 4
+    nodes: int = 20
+    steps: int = 40_000
+    batch: int = 256
+    lr: float = 1e-4
+    seed: int = 0
+    omega: float | None = None
+    heads: str | None = None
+    val_every: int = 250
+    val_size: int = 512
+    log_every: int = 50
+    threads: int = 1
+    max_time: float | None = None
+    grad_clip: float = 1.0
+    keep: str = "best"
+    model_options: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.model not in MODELS:
+            raise InputError(f"unknown model {self.model!r} (valid: {', '.join(MODELS)})")
+        check_generator_args(self.clusters, self.nodes, 50.0, 1000.0)
+        if self.clusters < 2:
+            raise InputError("training needs at least 2 clusters")
+        for name in ("steps", "batch", "val_every", "val_size", "log_every", "threads"):
+            check_int(name, getattr(self, name), 1)
+        check_float("learning rate", self.lr, 0.0, math.inf)
+        if self.omega is not None:
+            check_omega(self.omega)
+        if self.heads is not None and self.heads not in HEAD_RULES:
+            raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {self.heads!r}")
+        if self.max_time is not None and not self.max_time > 0:
+            raise InputError(f"max time must be > 0 seconds, got {self.max_time!r}")
+        if self.keep not in ("best", "last"):
+            raise InputError(f"keep must be 'best' or 'last', got {self.keep!r}")
+        if self.val_every % self.log_every:
+            raise InputError("val_every must be a multiple of log_every")
+
+    @property
+    def head_rule(self) -> str:
+        """The head rule used for rewards and validation."""
+        return self.heads or DEFAULT_HEADS[self.model]
+
+    def command(self, output: str | Path) -> str:
+        """The ``gtsp-bench train`` command line that reproduces this run."""
+        parts = ["gtsp-bench train", f"--model {self.model}", f"--clusters {self.clusters}",
+                 f"--nodes {self.nodes}", f"--steps {self.steps}", f"--batch {self.batch}",
+                 f"--lr {self.lr:g}", f"--seed {self.seed}", f"--heads {self.head_rule}",
+                 f"--threads {self.threads}", f"--keep {self.keep}"]
+        if self.omega is not None:
+            parts.append(f"--omega {self.omega:g}")
+        if self.max_time is not None:
+            parts.append(f"--max-time {self.max_time:g}")
+        return " ".join(parts) + f" -o {output}"
+
+    def identity(self) -> dict[str, Any]:
+        """Settings that a resumed run must share with the run it continues."""
+        d = dataclasses.asdict(self)
+        for k in ("steps", "max_time", "threads", "keep"):
+            d.pop(k)
+        return d
+
+
+def output_paths(ckpt: str | Path) -> dict[str, Path]:
+    """The files of a training run, from the policy file's path."""
+    p = Path(ckpt)
+    stem = p.with_suffix("")
+    return {"policy": p, "meta": stem.with_suffix(".json"),
+            "log": Path(f"{stem}.train.csv"), "state": Path(f"{stem}.state.pt")}
+
+
+def validation_env(cfg: TrainConfig) -> EnvBatch:
+    """The fixed validation set: seeded coordinates, omega evenly spread over [0, 1]."""
+    rng = np.random.default_rng([VAL_SEED, cfg.clusters, cfg.nodes])
+    coords = generate_batch(rng, cfg.val_size, cfg.clusters, cfg.nodes)
+    omega = cfg.omega if cfg.omega is not None else np.linspace(0.0, 1.0, cfg.val_size)
+    return make_env(coords, omega)
+
+
+def greedy_cost(model: nn.Module, env: EnvBatch, rule: str, chunk: int = 256) -> torch.Tensor:
+    """Cost ``(B,)`` of the model's greedy decoding (best of its greedy tours per instance)."""
+    out = []
+    b = env.shape[0]
+    with torch.inference_mode():
+        for i in range(0, b, chunk):
+            sub = env.rows(i, i + chunk)
+            order, _ = model.decode(sub, "greedy")
+            m = sub.shape[0]
+            rep = sub.repeat(order.shape[0] // m)
+            cost = tour_cost(rep, order, choose_heads(rep, order, rule)).view(m, -1)
+            out.append(cost.min(1).values)
+    return torch.cat(out)
+
+
+class Trainer:
+    """One training run; :meth:`run` trains, validates, logs and checkpoints."""
+
+    def __init__(self, cfg: TrainConfig, output: str | Path, *, resume: bool = False) -> None:
+        self.cfg = cfg
+        self.paths = output_paths(output)
+        if self.paths["policy"].suffix != ".pt":
+            raise InputError(f"{output}: the policy file must end in .pt")
+        torch.set_num_threads(cfg.threads)
+        torch.manual_seed(cfg.seed)
+        options = dict(cfg.model_options)
+        if cfg.model == "drl":
+            options.setdefault("n_nodes", cfg.nodes)
+        self.model = build_model({"model": cfg.model, **options})
+        if cfg.model == "drl":
+            actor = [p for n, p in self.model.named_parameters() if not n.startswith("critic.")]
+            self.optims = [torch.optim.Adam(actor, lr=cfg.lr),
+                           torch.optim.Adam(self.model.critic.parameters(), lr=cfg.lr)]
+        else:
+            self.optims = [torch.optim.Adam(self.model.parameters(), lr=cfg.lr)]
+        self.rng = np.random.default_rng([cfg.seed, 1])
+        self.gen = torch.Generator().manual_seed(cfg.seed)
+        self.step = 0
+        self.wall = 0.0
+        self.rows: list[dict[str, Any]] = []
+        self.best: float = math.inf
+        self.best_step = 0
+        self.val = validation_env(cfg)
+        self.val_opt = exact_by_enumeration(self.val) if cfg.clusters <= MAX_EXACT_K else None
+        state = self.paths["state"]
+        if resume:
+            self._load_state()
+        elif state.exists():
+            raise InputError(f"{state} exists: add --resume to continue that run, or remove it")
+
+    # ------------------------------------------------------------------ state
+    def _load_state(self) -> None:
+        path = self.paths["state"]
+        if not path.is_file():
+            raise InputError(f"{path}: no training state to resume")
+        try:
+            s = torch.load(path, map_location="cpu", weights_only=True)
+        except Exception:
+            raise InputError(f"{path}: corrupt training state") from None
+        if s.get("identity") != json.loads(json.dumps(self.cfg.identity())):
+            raise InputError(f"{path}: saved by a run with other settings; cannot resume with these")
+        self.model.load_state_dict(s["model"])
+        for opt, st in zip(self.optims, s["optims"], strict=True):
+            opt.load_state_dict(st)
+        self.rng.bit_generator.state = json.loads(s["rng"])
+        self.gen.set_state(s["gen"])
+        self.step, self.wall = int(s["step"]), float(s["wall"])
+        self.best, self.best_step = float(s["best"]), int(s["best_step"])
+        self.rows = json.loads(s["rows"])
+
+    def _save_state(self) -> None:
+        state = {
+            "identity": json.loads(json.dumps(self.cfg.identity())),
+            "model": self.model.state_dict(),
+            "optims": [o.state_dict() for o in self.optims],
+            "rng": json.dumps(self.rng.bit_generator.state),
+            "gen": self.gen.get_state(),
+            "step": self.step, "wall": self.wall, "best": self.best, "best_step": self.best_step,
+            "rows": json.dumps(self.rows),
+        }
+        buf = io.BytesIO()
+        torch.save(state, buf)
+        atomic_write_bytes(self.paths["state"], buf.getvalue())
+        self._write_log()
+
+    def _write_log(self) -> None:
+        out = io.StringIO()
+        writer = csv.DictWriter(out, fieldnames=LOG_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(self.rows)
+        atomic_write_text(self.paths["log"], out.getvalue())
+
+    def _write_meta(self, val_energy: float, val_gap: float | None) -> None:
+        meta = {
+            "model": self.cfg.model,
+            "command": self.cfg.command(self.paths["policy"]),
+            "seed": self.cfg.seed,
+            "steps": self.best_step,
+            "steps_trained": self.step,
+            "wall_s": round(self.wall, 1),
+            "val_energy": val_energy,
+            "val_gap_pct": val_gap,
+            "validation": {"seed": VAL_SEED, "instances": self.cfg.val_size,
+                           "clusters": self.cfg.clusters, "nodes": self.cfg.nodes,
+                           "omega": self.cfg.omega if self.cfg.omega is not None else "linspace(0, 1)",
+                           "decoding": "greedy", "heads": self.cfg.head_rule},
+            "config": self.model.config,
+            "train": dataclasses.asdict(self.cfg),
+            "torch": torch.__version__,
+        }
+        atomic_write_text(self.paths["meta"], json.dumps(meta, indent=2) + "\n")
+
+    # ------------------------------------------------------------------ training
+    def batch_env(self) -> EnvBatch:
+        """A fresh training batch."""
+        cfg = self.cfg
+        coords = generate_batch(self.rng, cfg.batch, cfg.clusters, cfg.nodes)
+        omega = cfg.omega if cfg.omega is not None else self.rng.uniform(0.0, 1.0, cfg.batch)
+        return make_env(coords, omega)
+
+    def train_step(self) -> tuple[float, float, float]:
+        """One gradient step; returns (actor loss, mean reward in J, critic loss or NaN)."""
+        env = self.batch_env()
+        self.model.train()
+        order, logp = self.model.decode(env, "sample", generator=self.gen)
+        rep = env.repeat(order.shape[0] // env.shape[0])
+        with torch.no_grad():
+            cost = tour_cost(rep, order, choose_heads(rep, order, self.cfg.head_rule))
+        c = (cost / COST_SCALE).float()
+        critic_loss = torch.tensor(math.nan)
+        if self.cfg.model == "drl":
+            value = self.model.critic(env)
+            loss = ((c - value.detach()) * logp).mean()
+            critic_loss = torch.nn.functional.mse_loss(value, c)
+            total = loss + critic_loss
+        else:
+            c = c.view(env.shape[0], -1)
+            loss = ((c - c.mean(1, keepdim=True)).flatten() * logp).mean()
+            total = loss
+        for opt in self.optims:
+            opt.zero_grad(set_to_none=True)
+        total.backward()
+        nn.utils.clip_grad_norm_(self.model.parameters(), self.cfg.grad_clip)
+        for opt in self.optims:
+            opt.step()
+        return float(loss.detach()), -float(cost.mean()), float(critic_loss.detach())
+
+    def validate(self) -> tuple[float, float | None]:
+        """Mean greedy energy (J) on the validation set, and the mean gap (%) when known."""
+        self.model.eval()
+        cost = greedy_cost(self.model, self.val, self.cfg.head_rule)
+        gap = None
+        if self.val_opt is not None:
+            gap = float(((cost / self.val_opt - 1) * 100).mean())
+        return float(cost.mean()), gap
+
+    def run(self, progress: bool = True) -> dict[str, Any]:
+        """Train until ``steps`` or ``max_time``; returns the final JSON metadata."""
+        from tqdm import tqdm
+
+        cfg = self.cfg
+        if self.step == 0 and not self.rows:
+            val_energy, gap = self.validate()
+            self._record_best(val_energy, gap)
+            self.rows.append({"step": 0, "loss": "", "reward": "", "val_energy": val_energy,
+                              "wall_s": 0.0, "val_gap_pct": _fmt(gap), "critic_loss": ""})
+            self._save_state()
+        bar = tqdm(total=cfg.steps, initial=self.step, disable=not progress, unit="step",
+                   dynamic_ncols=True)
+        window: list[tuple[float, float, float]] = []
+        start = time.perf_counter() - self.wall
+        try:
+            while self.step < cfg.steps:
+                if cfg.max_time is not None and self.wall >= cfg.max_time:
+                    break
+                window.append(self.train_step())
+                self.step += 1
+                self.wall = time.perf_counter() - start
+                bar.update(1)
+                last = self.step == cfg.steps or (cfg.max_time is not None and self.wall >= cfg.max_time)
+                if self.step % cfg.log_every == 0 or last:
+                    self._log(window, force_val=last)
+                    window = []
+                    bar.set_postfix(reward=f"{self.rows[-1]['reward']:.1f}",
+                                    val=f"{self.best:.1f}")
+        finally:
+            bar.close()
+        return json.loads(self.paths["meta"].read_text())
+
+    def _log(self, window: list[tuple[float, float, float]], force_val: bool = False) -> None:
+        row: dict[str, Any] = {"step": self.step, "wall_s": round(self.wall, 2), "val_energy": "",
+                               "val_gap_pct": ""}
+        if window:
+            arr = np.array(window)
+            row.update(loss=arr[:, 0].mean(), reward=arr[:, 1].mean(),
+                       critic_loss="" if np.isnan(arr[:, 2]).all() else arr[:, 2].mean())
+        else:
+            row.update(loss="", reward="", critic_loss="")
+        if force_val or self.step % self.cfg.val_every == 0 or self.step == self.cfg.steps:
+            val_energy, gap = self.validate()
+            row.update(val_energy=val_energy, val_gap_pct=_fmt(gap))
+            self._record_best(val_energy, gap)
+            self.rows.append(row)
+            self._save_state()
+        else:
+            self.rows.append(row)
+
+    def _record_best(self, val_energy: float, gap: float | None) -> None:
+        if val_energy < self.best or self.cfg.keep == "last":
+            self.best, self.best_step = val_energy, self.step
+            save_policy(self.model, self.paths["policy"])
+            self._write_meta(val_energy, gap)
+        else:  # keep the best policy, update the run's progress
+            meta = json.loads(self.paths["meta"].read_text())
+            meta.update(steps_trained=self.step, wall_s=round(self.wall, 1))
+            atomic_write_text(self.paths["meta"], json.dumps(meta, indent=2) + "\n")
+
+
+def _fmt(x: float | None) -> Any:
+    return "" if x is None else x
+
+
+def train(cfg: TrainConfig, output: str | Path, *, resume: bool = False,
+          progress: bool = True) -> dict[str, Any]:
+    """Train a policy; see the module docstring for the files written. Returns the metadata."""
+    return Trainer(cfg, output, resume=resume).run(progress=progress)

@@ -1,0 +1,142 @@
+"""Shared RL pieces: the torch reward equals the evaluator, heads, exact enumeration, checkpoints."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from gtsp_bench.energy import evaluate, evaluate_batch  # noqa: E402
+from gtsp_bench.errors import InputError  # noqa: E402
+from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
+from gtsp_bench.instance import Instance  # noqa: E402
+from gtsp_bench.problem import price  # noqa: E402
+from gtsp_bench.registry import run_solver  # noqa: E402
+from solvers.drl import PointerPolicy  # noqa: E402
+from solvers.heads import optimal_heads  # noqa: E402
+from solvers.rl_common import (  # noqa: E402
+    env_from_instances,
+    exact_by_enumeration,
+    load_policy,
+    make_env,
+    mirror,
+    optimal_heads_batch,
+    paper_heads,
+    save_policy,
+    tour_cost,
+)
+
+
+def _random_orders(rng: np.random.Generator, b: int, k: int) -> torch.Tensor:
+    return torch.from_numpy(np.argsort(rng.random((b, k)), axis=1))
+
+
+def test_torch_reward_equals_numpy_evaluator():
+    """tour_cost on random tours equals evaluate_batch and evaluate (relative 1e-12)."""
+    rng = np.random.default_rng(3)
+    b, k, n = 40, 5, 6
+    coords = generate_batch(rng, b, k, n)
+    omega = rng.uniform(0, 1, b)
+    env = make_env(coords, omega)
+    order = _random_orders(rng, b, k)
+    heads = torch.from_numpy(rng.integers(0, n, (b, k)))
+    got = tour_cost(env, order, heads).numpy()
+    ref = evaluate_batch(coords, np.array([500.0, 0.0]), order.numpy(), heads.numpy(), omega)["total"]
+    np.testing.assert_allclose(got, ref, rtol=1e-12)
+    for i in range(5):
+        inst = Instance(f"i{i}", tuple(coords[i]), depot=np.array([500.0, 0.0]))
+        ev = evaluate(inst, omega[i], order[i].tolist(), heads[i].tolist())
+        assert got[i] == pytest.approx(ev.objective, rel=1e-12)
+
+
+def test_mirror_keeps_every_cost():
+    """The mirrored batch prices every tour exactly as the original (augmentation is safe)."""
+    rng = np.random.default_rng(8)
+    env = make_env(generate_batch(rng, 16, 4, 5), rng.uniform(0, 1, 16))
+    order = _random_orders(rng, 16, 4)
+    heads = torch.from_numpy(rng.integers(0, 5, (16, 4)))
+    flipped = mirror(env)
+    assert not torch.equal(flipped.coords, env.coords)
+    torch.testing.assert_close(tour_cost(flipped, order, heads), tour_cost(env, order, heads))
+
+
+def test_heads_match_the_numpy_rules():
+    """Batched optimal heads equal solvers.heads.optimal_heads; paper heads follow eq. chselection."""
+    rng = np.random.default_rng(4)
+    k, n = 4, 5
+    instances = [generate_instance(k, n, seed=i) for i in range(8)]
+    omegas = rng.uniform(0, 1, 8)
+    env = env_from_instances(instances, omegas)
+    problems = [price(inst, w) for inst, w in zip(instances, omegas, strict=True)]
+    for i, problem in enumerate(problems):  # node costs are price()'s
+        np.testing.assert_allclose(env.node_cost[i].numpy().ravel(), problem.node_cost[:-1], rtol=1e-12)
+    order = _random_orders(rng, 8, k)
+    heads, cost = optimal_heads_batch(env, order)
+    paper = paper_heads(env, order)
+    for i, problem in enumerate(problems):
+        _, best = optimal_heads(problem, order[i].tolist())
+        assert cost[i].item() == pytest.approx(best, rel=1e-12)
+        assert tour_cost(env, order, heads)[i].item() == pytest.approx(best, rel=1e-12)
+        prev, expect = problem.depot, [0] * k
+        for c in order[i].tolist():
+            nodes = problem.clusters[c]
+            j = int(np.argmin(problem.edge_cost[prev, nodes] + problem.node_cost[nodes]))
+            expect[c], prev = j, nodes[j]
+        assert paper[i].tolist() == expect
+
+
+def test_exact_enumeration_matches_brute_force():
+    """The enumerated optimum equals the brute-force solver on tiny instances."""
+    instances = [generate_instance(3, 3, seed=i) for i in range(4)]
+    env = env_from_instances(instances, [0.2, 0.5, 0.7, 1.0])
+    opt = exact_by_enumeration(env, chunk=7)
+    for i, inst in enumerate(instances):
+        brute = run_solver("brute", inst, [0.2, 0.5, 0.7, 1.0][i]).objective
+        assert opt[i].item() == pytest.approx(brute, rel=1e-12)
+
+
+def test_unequal_clusters_are_padded_without_changing_the_optimum():
+    """Padding a small cluster with copies of its node 0 keeps the brute-force optimum."""
+    clusters = (np.array([[100.0, 100.0], [120.0, 90.0], [90.0, 130.0]]),
+                np.array([[700.0, 500.0]]), np.array([[300.0, 800.0], [320.0, 780.0]]))
+    inst = Instance("uneven", clusters, depot=np.array([500.0, 0.0]))
+    env = env_from_instances([inst], [0.4])
+    assert env.shape == (1, 3, 3)
+    assert exact_by_enumeration(env)[0].item() == pytest.approx(run_solver("brute", inst, 0.4).objective)
+
+
+def test_non_uav_instance_is_refused():
+    """A distance-only instance gives a clear InputError."""
+    inst = Instance("plain", (np.array([[0.0, 1.0]]),), depot=None, params=None)
+    with pytest.raises(InputError, match="need a UAV instance with a depot"):
+        env_from_instances([inst], [0.5])
+
+
+def test_checkpoint_round_trip_and_bad_files(tmp_path):
+    """A saved policy reloads with identical outputs; corrupt or mismatched files: one-line errors."""
+    torch.manual_seed(0)
+    model = PointerPolicy(n_nodes=5, dim=16)
+    path = tmp_path / "p.pt"
+    save_policy(model, path)
+    loaded = load_policy(path, "drl")
+    env = make_env(generate_batch(np.random.default_rng(0), 4, 4, 5), 0.3)
+    with torch.no_grad():
+        assert torch.equal(model.decode(env)[1], loaded.decode(env)[1])
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(path.read_bytes()[:200])
+    truncated = tmp_path / "text.pt"
+    truncated.write_text("not a checkpoint")
+    other = PointerPolicy(n_nodes=5, dim=16)
+    other.config = {"model": "drl", "n_nodes": 5, "dim": 32}  # shape mismatch
+    mismatched = tmp_path / "mismatched.pt"
+    save_policy(other, mismatched)
+    cases = [(corrupt, "not a readable checkpoint"), (truncated, "not a readable checkpoint"),
+             (mismatched, "weights do not fit the model config"),
+             (tmp_path / "missing.pt", "no such checkpoint file")]
+    for bad, message in cases:
+        with pytest.raises(InputError, match=message) as err:
+            load_policy(bad, "drl")
+        assert "\n" not in str(err.value) and str(bad) in str(err.value)
+    with pytest.raises(InputError, match="holds a 'drl' model, not 'am'"):
+        load_policy(path, "am")

@@ -1,0 +1,136 @@
+"""Training: a tiny model learns a little, logs the documented columns, and resumes after a kill."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from gtsp_bench.cli import main  # noqa: E402
+from gtsp_bench.errors import InputError  # noqa: E402
+from solvers.rl_common import load_policy  # noqa: E402
+from solvers.train import TrainConfig, Trainer, output_paths, train  # noqa: E402
+
+from .conftest import REPO  # noqa: E402
+
+
+def _cfg(model: str = "drl", steps: int = 6, **kw) -> TrainConfig:
+    options = {"dim": 16} if model == "drl" else {"dim": 16, "n_heads": 2, "n_layers": 1, "ff": 32}
+    return TrainConfig(model=model, clusters=3, nodes=4, steps=steps, batch=16, lr=1e-3, seed=7,
+                       val_every=2, val_size=8, log_every=1, model_options=options, **kw)
+
+
+def _rows(path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.mark.parametrize("model", ["drl", "am"])
+def test_tiny_model_trains_and_writes_its_files(tmp_path, model):
+    """A few steps change the weights and the loss; policy, JSON and CSV log are written."""
+    trainer = Trainer(_cfg(model), tmp_path / "m.pt")
+    before = {k: v.clone() for k, v in trainer.model.state_dict().items()}
+    meta = trainer.run(progress=False)
+    after = trainer.model.state_dict()
+    assert any(not torch.equal(before[k], after[k]) for k in before)
+    paths = output_paths(tmp_path / "m.pt")
+    rows = _rows(paths["log"])
+    with open(paths["log"]) as f:
+        assert f.readline().startswith("step,loss,reward,val_energy,wall_s")
+    assert [int(r["step"]) for r in rows] == list(range(7))
+    losses = {float(r["loss"]) for r in rows[1:]}
+    assert len(losses) > 1
+    assert all(float(r["reward"]) < 0 for r in rows[1:])
+    assert float(rows[0]["val_gap_pct"]) >= -1e-9  # greedy is never below the exact optimum
+    assert meta["model"] == model and meta["steps_trained"] == 6 and meta["val_energy"] > 0
+    assert meta["command"].startswith(f"gtsp-bench train --model {model}")
+    assert load_policy(paths["policy"], model).config == trainer.model.config
+
+
+def test_resume_after_interruption_continues_from_saved_step(tmp_path, monkeypatch):
+    """Interrupted at step 5 (state saved at 4), a resumed run ends where an uninterrupted one does."""
+    ref = Trainer(_cfg(steps=8), tmp_path / "ref.pt")
+    ref.run(progress=False)
+
+    broken = Trainer(_cfg(steps=8), tmp_path / "run.pt")
+    original = Trainer.train_step
+
+    def crash(self):
+        if self.step == 5:
+            raise KeyboardInterrupt
+        return original(self)
+
+    monkeypatch.setattr(Trainer, "train_step", crash)
+    with pytest.raises(KeyboardInterrupt):
+        broken.run(progress=False)
+    monkeypatch.setattr(Trainer, "train_step", original)
+    resumed = Trainer(_cfg(steps=8), tmp_path / "run.pt", resume=True)
+    assert resumed.step == 4
+    resumed.run(progress=False)
+    for key, value in ref.model.state_dict().items():
+        torch.testing.assert_close(resumed.model.state_dict()[key], value)
+    steps = [int(r["step"]) for r in _rows(output_paths(tmp_path / "run.pt")["log"])]
+    assert steps == list(range(9))
+
+
+def test_state_guards(tmp_path):
+    """An existing state needs --resume, other settings cannot resume it, corrupt state is refused."""
+    train(_cfg(steps=2), tmp_path / "m.pt", progress=False)
+    with pytest.raises(InputError, match="add --resume"):
+        Trainer(_cfg(steps=4), tmp_path / "m.pt")
+    with pytest.raises(InputError, match="other settings"):
+        Trainer(TrainConfig(**{**_cfg(steps=4).__dict__, "lr": 0.5}), tmp_path / "m.pt", resume=True)
+    output_paths(tmp_path / "m.pt")["state"].write_bytes(b"junk")
+    with pytest.raises(InputError, match="corrupt training state"):
+        Trainer(_cfg(steps=4), tmp_path / "m.pt", resume=True)
+    with pytest.raises(InputError, match="no training state"):
+        Trainer(_cfg(steps=4), tmp_path / "other.pt", resume=True)
+
+
+def test_cli_train_killed_then_resumed(tmp_path, capsys):
+    """A real SIGKILL mid-run: --resume continues from the saved step and the log has no repeats."""
+    out = tmp_path / "k.pt"
+    argv = ["train", "--model", "drl", "-k", "3", "-n", "4", "--steps", "4000", "--batch", "8",
+            "--val-every", "10", "--val-size", "8", "--seed", "3", "--no-progress", "-o", str(out)]
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    code = f"import sys; from gtsp_bench.cli import main; sys.exit(main({argv!r}))"
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, stderr=subprocess.PIPE)
+    state = output_paths(out)["state"]
+    log = output_paths(out)["log"]
+    deadline = time.monotonic() + 40
+    while time.monotonic() < deadline and (not log.exists() or len(_rows(log)) < 3):
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert state.exists(), proc.stderr.read().decode()
+    saved = int(_rows(log)[-1]["step"])
+    assert saved >= 10
+    code = main([*argv[:argv.index("--steps") + 1], str(saved + 10), *argv[argv.index("--steps") + 2:],
+                 "--resume"])
+    assert code == 0, capsys.readouterr().err
+    steps = [int(r["step"]) for r in _rows(log)]
+    assert steps == sorted(set(steps)) and steps[-1] == saved + 10
+    meta = json.loads(output_paths(out)["meta"].read_text())
+    assert meta["steps_trained"] == saved + 10
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--steps", "0"], "steps must be an integer >= 1"),
+    (["--clusters", "1"], "at least 2 clusters"),
+    (["--omega", "1.5"], "omega must be in [0, 1]"),
+    (["--lr", "-1"], "learning rate must be a number"),
+])
+def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
+    """Bad training settings: exit 2 with one line, and no file written."""
+    code = main(["train", *args, "--no-progress", "-o", str(tmp_path / "x.pt")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
