@@ -690,11 +690,10 @@ def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np
         local = np.full(model.problem.n_nodes, -1)
         local[model.nodes] = np.arange(n)
         t = local[tour]
-        if np.all(t >= 0):
+        if np.all(t >= 0):  # (the tour may use pruned nodes)
             a, b = np.minimum(t, np.roll(t, -1)), np.maximum(t, np.roll(t, -1))
-            edge_id = {(int(i), int(j)): k for k, (i, j) in enumerate(zip(model.tail, model.head,
-                                                                            strict=True))}
-            keep[[edge_id[(int(i), int(j))] for i, j in zip(a, b, strict=True)]] = True
+            keys = model.tail * n + model.head  # sorted: edges come in (tail, head) order
+            keep[np.searchsorted(keys, a * n + b)] = True
     return np.concatenate([np.arange(n), n + np.flatnonzero(keep)])
 
 
@@ -829,7 +828,7 @@ class _Search:
                 continue
             lp.purge(values, 3)
             lp.add_cuts(new)
-        self.stats["root_rounds"], self.stats["root_bound"] = rounds, self.lb
+        self.stats["root_rounds"], self.stats["root_bound"] = rounds, float(self.lb)
         self.stats["root_cuts"] = len(lp.cuts)
 
     def absent(self) -> np.ndarray:
