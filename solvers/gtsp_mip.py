@@ -1023,7 +1023,7 @@ def solve_exact(
         tour = upper_bound_tour(problem, options.lns_trials, seed,
                                 None if time_limit is None else 0.25 * time_limit)
     with _Timer(stats, "prune_s"):
-        kept = prune_heads(problem) if options.prune else problem.clusters
+        kept = prune_heads(problem, deadline=deadline) if options.prune else problem.clusters
     search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
     search.root()
     if not search.proven and search.left() > 0:

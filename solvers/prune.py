@@ -16,6 +16,8 @@ Cost: O(K^3 N^3) for the first pass (K clusters of N nodes). Keeping only convex
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from gtsp_bench.problem import Problem
@@ -44,7 +46,9 @@ def _cheapest_heads(
     return keep
 
 
-def prune_heads(problem: Problem, *, max_passes: int | None = None) -> tuple[np.ndarray, ...]:
+def prune_heads(
+    problem: Problem, *, max_passes: int | None = None, deadline: float | None = None
+) -> tuple[np.ndarray, ...]:
     """Candidate heads of each GTSP cluster that survive pair-dominance pruning.
 
     Parameters
@@ -54,6 +58,8 @@ def prune_heads(problem: Problem, *, max_passes: int | None = None) -> tuple[np.
     max_passes
         Stop after this many passes over all clusters (``None``: until nothing changes). Any
         number of passes is exact; more passes prune more.
+    deadline
+        ``time.perf_counter()`` value after which it stops early (still exact).
 
     Returns
     -------
@@ -71,6 +77,8 @@ def prune_heads(problem: Problem, *, max_passes: int | None = None) -> tuple[np.
         changed = False
         passes += 1
         for c in range(m):
+            if deadline is not None and time.perf_counter() > deadline:
+                return tuple(kept)
             if len(kept[c]) == 1:
                 continue
             others = [j for j in range(m) if j != c]

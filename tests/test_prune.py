@@ -67,3 +67,10 @@ def test_two_clusters_are_not_pruned():
                                           np.array([[5.0, 0.0], [9.0, 0.0]])), params=None)
     problem = price(inst, None)
     assert [len(k) for k in prune_heads(problem)] == [2, 2]
+
+
+def test_past_deadline_stops_early_and_keeps_everything():
+    """With its deadline already past it prunes nothing (which is still exact)."""
+    problem = price(generate_instance(5, 6, seed=1), 0.5)
+    kept = prune_heads(problem, deadline=0.0)
+    assert [len(k) for k in kept] == [len(c) for c in problem.clusters]
