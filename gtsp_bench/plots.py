@@ -148,9 +148,14 @@ def plot_trajectory(instance: Instance, tours: Mapping[str, tuple[Sequence[int],
 
 
 def plot_training(df: pd.DataFrame, y: str = "loss", ax: Any = None) -> Any:
-    """A training-log column against ``step``, one line per ``model``."""
+    """A training-log column against ``step``, one line per ``model``.
+
+    Steps where the column is empty (validation is logged only every few steps) are skipped, so
+    sparse columns still draw as lines.
+    """
     ax = _axes(ax)
     for model, sub in df.groupby("model"):
+        sub = sub[["step", y]].dropna()
         ax.plot(sub["step"], sub[y], label=str(model), color=solver_color(str(model)), linewidth=1)
     ax.set_xlabel("training step")
     ax.set_ylabel(y)

@@ -535,12 +535,13 @@ def figure_for(config: BenchConfig, experiment: str, df: pd.DataFrame,
 
 
 def training_figure(df: pd.DataFrame) -> Any:
-    """Loss and validation energy against training step, one line per model."""
+    """Actor loss, training reward and validation energy against training step, per model."""
     from gtsp_bench import plots
 
-    fig, axes = _figure(1, 2, (5.5, 4))
+    fig, axes = _figure(1, 3, (5.5, 4))
     plots.plot_training(df, "loss", ax=axes[0, 0])
-    plots.plot_training(df, "val_energy", ax=axes[0, 1])
+    plots.plot_training(df, "reward", ax=axes[0, 1])
+    plots.plot_training(df, "val_energy", ax=axes[0, 2])
     return fig
 
 

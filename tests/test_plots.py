@@ -82,6 +82,16 @@ def test_plot_training_one_line_per_model():
     assert list(ax.get_lines()[0].get_xdata()) == [0, 10]
 
 
+def test_plot_training_skips_empty_steps():
+    """A sparsely logged column (validation every few steps) still draws one connected line."""
+    df = pd.DataFrame({"model": ["a"] * 4, "step": [0, 10, 20, 30],
+                       "val_energy": [5.0, np.nan, 4.0, np.nan]})
+    ax = Figure().subplots()
+    plots.plot_training(df, "val_energy", ax=ax)
+    line = ax.get_lines()[0]
+    assert list(line.get_xdata()) == [0, 20] and list(line.get_ydata()) == [5.0, 4.0]
+
+
 def test_without_ax_a_new_figure_is_made(rows):
     """ax=None draws on a new pyplot figure and returns its Axes."""
     ax = plots.plot_ratio(rows, "K")

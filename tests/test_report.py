@@ -47,8 +47,13 @@ def test_claims_gap_grows_with_k_and_runtime_order():
     v = _verdicts({"ratio-k": df, "runtime": df})
     grows = v[("ratio-k", "the gap to the optimum grows with K (greedy, ACO, DRL)")]
     assert grows.startswith("holds") and "drl not run" in grows
-    assert v[("runtime", "greedy < DRL < ACO < Gurobi (exact) at every K")] == \
+    assert v[("runtime", "greedy < DRL < ACO < Gurobi (exact; here milp) at every K")] == \
         "not checked (drl, milp not run)"
+    timed = df.assign(reference="dp", runtime_s=df["solver"].map({"greedy": 0.1, "aco": 1.0}))
+    timed = pd.concat([timed, timed[timed["solver"] == "aco"].assign(solver="drl", runtime_s=0.5),
+                       timed[timed["solver"] == "aco"].assign(solver="dp", runtime_s=2.0)])
+    assert _verdicts({"runtime": timed})[
+        ("runtime", "greedy < DRL < ACO < Gurobi (exact; here dp) at every K")] == "holds"
     shrinking = _ratios({"greedy": [1.12, 1.08, 1.05]}, "K", [4, 5, 6])
     assert _verdicts({"ratio-k": shrinking})[
         ("ratio-k", "the gap to the optimum grows with K (greedy, ACO, DRL)")].startswith("does not hold")
