@@ -384,9 +384,10 @@ def load_policy(path: str | Path, model_name: str | None = None) -> nn.Module:
         raise InputError(f"{p}: no such checkpoint file")
     try:
         data = torch.load(p, map_location="cpu", weights_only=True)
-    except Exception as e:  # torch raises many kinds on a corrupt file
-        reason = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise InputError(f"{p}: not a readable checkpoint ({reason[:120]})") from None
+    except Exception:  # torch raises many kinds (and long texts) on a corrupt or foreign file
+        raise InputError(
+            f"{p}: not a readable checkpoint (not a file written by 'gtsp-bench train', or damaged)"
+        ) from None
     if not isinstance(data, dict) or data.get("kind") != FILE_KIND:
         raise InputError(f"{p}: not a gtsp-bench policy checkpoint")
     config = data.get("config")
