@@ -5,7 +5,9 @@ training (training draws from its own seeded stream; validation has its own seed
 omega in 0.3 and 0.6 and each learned solver, all 100 instances are solved in one batch; the
 script prints the mean and max gap to the exact optimum (the ``dp`` solver, cached in
 ``benchmarks/drl_exact.csv``) and the batched wall time per instance (median of ``--repeats``
-runs). Every solution is re-priced by the shared evaluator.
+runs). Every solution is re-priced by the shared evaluator. A first reference row, ``bound:
+paper heads``, is the best any visiting order can reach when heads follow the paper's rule
+(:func:`solvers.rl_common.paper_rule_optimum`): no policy using that rule can be below it.
 
     PYTHONPATH=. .venv/bin/python benchmarks/drl.py [--repeats 3] [--k 4,7,10] [--csv out.csv]
 
@@ -28,6 +30,7 @@ from gtsp_bench.energy import evaluate
 from gtsp_bench.generator import instance_set
 from gtsp_bench.io import atomic_write_text
 from gtsp_bench.registry import get_solver, run_solver
+from solvers.rl_common import env_from_instances, paper_rule_optimum
 
 TEST_SEED = 5_000
 OMEGAS = (0.3, 0.6)
@@ -91,9 +94,24 @@ def main(argv: list[str] | None = None) -> int:
     instances = {k: instance_set(100, k, TEST_SEED) for k in ks}
     opt = exact_optima(instances, ks)
     rows = []
+    bound = {}
+    for k in ks:
+        for w in OMEGAS:
+            env = env_from_instances(instances[k], [w] * len(instances[k]))
+            bound[(k, w)] = np.concatenate([paper_rule_optimum(env.rows(i, i + 20)).numpy()
+                                            for i in range(0, len(instances[k]), 20)])
     header = f"{'solver':<26} {'K':>3} {'omega':>5} {'mean gap %':>10} {'max gap %':>9} {'ms/inst':>8}"
     print(header)
     print("-" * len(header))
+    for k in ks:
+        for w in OMEGAS:
+            best = np.array([opt[(inst.name, w)] for inst in instances[k]])
+            gap = (bound[(k, w)] / best - 1) * 100
+            rows.append({"solver": "bound: paper heads", "K": k, "omega": w,
+                         "mean_gap_pct": gap.mean(), "max_gap_pct": gap.max(),
+                         "ms_per_instance": float("nan")})
+            print(f"{'bound: paper heads':<26} {k:>3} {w:>5g} {gap.mean():>10.3f} {gap.max():>9.3f} "
+                  f"{'-':>8}", flush=True)
     chosen = [s for s in SOLVERS if not args.only
               or any(s[0].startswith(p) for p in args.only.split(","))]
     for label, name, options in chosen:

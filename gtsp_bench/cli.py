@@ -141,6 +141,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="train for one omega (default: omega uniform in [0, 1] per instance)")
     p.add_argument("--heads", choices=("paper", "optimal"), default=None,
                    help="head rule in the reward (default: paper for drl, optimal for am)")
+    p.add_argument("--glimpse", choices=("all", "unvisited"), default=None,
+                   help="drl: elements the decoder's glimpse attends to: every element, or only the "
+                   "unvisited ones (default: unvisited, which generalises better to larger K)")
     p.add_argument("--val-every", type=_int, default=250, metavar="S",
                    help="validate and checkpoint every S steps (default: 250)")
     p.add_argument("--val-size", type=_int, default=512, metavar="M",
@@ -251,6 +254,14 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _train_model_options(args: argparse.Namespace) -> dict[str, str]:
+    if args.model != "drl":
+        if args.glimpse is not None:
+            raise InputError("--glimpse is an option of the drl model only")
+        return {}
+    return {"glimpse": args.glimpse or "unvisited"}
+
+
 def _cmd_train(args: argparse.Namespace) -> int:
     import math
 
@@ -260,7 +271,8 @@ def _cmd_train(args: argparse.Namespace) -> int:
                       steps=args.steps, batch=args.batch, lr=args.lr, seed=args.seed,
                       omega=args.omega, heads=args.heads, val_every=args.val_every,
                       val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
-                      threads=args.threads, max_time=args.max_time, keep=args.keep)
+                      threads=args.threads, max_time=args.max_time, keep=args.keep,
+                      model_options=_train_model_options(args))
     meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
           f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)

@@ -7,13 +7,18 @@ to the N it was trained with (other N: a clear error); the depot has its own emb
 omega). Decoder: an LSTM cell of 128 units fed the embedding of the element chosen last (the depot
 first). Attention (eqs. "u_k" to "u_kp"): u = v_a tanh(W1 e + W2 h), a = softmax(u),
 g = sum a e, logits = v_g tanh(W3 e + W4 g), clipped to C_L tanh(.) with C_L = 10, visited
-elements masked. Heads: the paper's rule (eq. "chselection") by default, or optimal heads for the
+elements masked. The paper's u_k runs over every element; with ``glimpse="unvisited"`` (how
+``gtsp-bench train`` and the shipped checkpoint train it) visited elements are masked in the
+glimpse too, so g summarises what is left to visit, which the LSTM state alone must otherwise
+track: a policy trained on K = 4 then generalises much better to K = 10 (benchmarks/drl.py).
+Heads: the paper's rule (eq. "chselection") by default, or optimal heads for the
 decoded order. The critic: an attention-weighted sum of its own embeddings -> dense + ReLU ->
 dense -> the expected cost (kJ).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import torch
@@ -21,6 +26,9 @@ from torch import nn
 
 from gtsp_bench.errors import InputError
 from solvers.rl_common import EnvBatch, LearnedSolver, choose, element_features
+
+#: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
+GLIMPSES = ("all", "unvisited")
 
 
 class _Embedding(nn.Module):
@@ -68,11 +76,19 @@ class PointerPolicy(nn.Module):
         N, the cluster size it embeds.
     dim
         D, embedding and LSTM width (paper: 128).
+    glimpse
+        ``all``: the glimpse attends to every element; ``unvisited``: visited ones are masked
+        in the glimpse as in the pointer.
     """
 
-    def __init__(self, n_nodes: int = 20, dim: int = 128) -> None:
+    def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all") -> None:
         super().__init__()
+        if glimpse not in GLIMPSES:
+            raise InputError(f"drl glimpse must be one of {', '.join(GLIMPSES)}, got {glimpse!r}")
         self.config: dict[str, Any] = {"model": "drl", "n_nodes": n_nodes, "dim": dim}
+        if glimpse != "all":
+            self.config["glimpse"] = glimpse
+        self.mask_glimpse = glimpse == "unvisited"
         self.embed = _Embedding(n_nodes, dim)
         self.lstm = nn.LSTMCell(dim, dim)
         self.w1 = nn.Linear(dim, dim, bias=False)
@@ -82,6 +98,18 @@ class PointerPolicy(nn.Module):
         self.w4 = nn.Linear(dim, dim)
         self.v_g = nn.Linear(dim, 1, bias=False)
         self.critic = Critic(n_nodes, dim)
+
+    def glimpse(self, e: torch.Tensor, k1: torch.Tensor, h: torch.Tensor, visited: torch.Tensor,
+                ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Glimpse ``g = sum a e`` ``(B, D)`` and its weights ``a = softmax(u)`` ``(B, K + 1)``.
+
+        ``k1`` is ``W1 e``; visited elements get zero weight when the glimpse is ``unvisited``.
+        """
+        u = self.v_a(torch.tanh(k1 + self.w2(h)[:, None])).squeeze(-1)
+        if self.mask_glimpse:
+            u = u.masked_fill(visited, -math.inf)
+        a = torch.softmax(u, dim=-1)
+        return (a[..., None] * e).sum(1), a
 
     def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
                ) -> tuple[torch.Tensor, torch.Tensor]:
@@ -105,8 +133,7 @@ class PointerPolicy(nn.Module):
         actions, logp = [], e.new_zeros(b)
         for _ in range(m - 1):
             h, c = self.lstm(x, (h, c))
-            a = torch.softmax(self.v_a(torch.tanh(k1 + self.w2(h)[:, None])).squeeze(-1), dim=-1)
-            g = (a[..., None] * e).sum(1)
+            g = self.glimpse(e, k1, h, visited)[0]
             logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
             act, step_logp, visited = choose(logits, visited, mode, generator)
             logp = logp + step_logp

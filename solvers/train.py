@@ -113,6 +113,8 @@ class TrainConfig:
                  f"--nodes {self.nodes}", f"--steps {self.steps}", f"--batch {self.batch}",
                  f"--lr {self.lr:g}", f"--seed {self.seed}", f"--heads {self.head_rule}",
                  f"--threads {self.threads}", f"--keep {self.keep}"]
+        if "glimpse" in self.model_options:
+            parts.append(f"--glimpse {self.model_options['glimpse']}")
         if self.omega is not None:
             parts.append(f"--omega {self.omega:g}")
         if self.max_time is not None:

@@ -26,11 +26,12 @@ def tiny_ckpt(tmp_path_factory):
     return path
 
 
+@pytest.mark.parametrize("glimpse", ["all", "unvisited"])
 @pytest.mark.parametrize("k", [1, 3, 6, 9])
-def test_decoded_orders_are_permutations(k):
+def test_decoded_orders_are_permutations(k, glimpse):
     """Greedy and sampled orders visit every cluster exactly once; log-probabilities are finite."""
     torch.manual_seed(0)
-    model = PointerPolicy(n_nodes=4, dim=16)
+    model = PointerPolicy(n_nodes=4, dim=16, glimpse=glimpse)
     env = make_env(generate_batch(np.random.default_rng(k), 32, k, 4),
                    np.linspace(0, 1, 32))
     gen = torch.Generator().manual_seed(0)
@@ -52,6 +53,39 @@ def test_masking_gives_visited_clusters_zero_probability():
     order, _ = model.decode(env, "sample", generator=torch.Generator().manual_seed(3))
     assert all(len(set(row)) == 5 for row in order.tolist())
     assert order.min() >= 0
+
+
+def test_unvisited_glimpse_gives_visited_elements_zero_weight():
+    """glimpse=unvisited: visited elements (the depot included) get weight 0 and the weights of
+    the others sum to 1; glimpse=all weighs every element."""
+    env = make_env(generate_batch(np.random.default_rng(4), 16, 6, 4), 0.5)
+    visited = torch.zeros((16, 7), dtype=torch.bool)
+    visited[:, 0] = True
+    visited[torch.arange(16), torch.randint(1, 7, (16,))] = True
+    for glimpse in ("unvisited", "all"):
+        torch.manual_seed(2)
+        model = PointerPolicy(n_nodes=4, dim=16, glimpse=glimpse)
+        e = model.embed(env)
+        _, a = model.glimpse(e, model.w1(e), torch.randn(16, 16), visited)
+        assert torch.allclose(a.sum(1), torch.ones(16))
+        if glimpse == "unvisited":
+            assert (a[visited] == 0).all() and (a[~visited] > 0).all()
+        else:
+            assert (a > 0).all()
+
+
+def test_glimpse_option_is_saved_and_checked(tmp_path):
+    """The glimpse setting round-trips through a policy file; a bad one is a clear InputError."""
+    from solvers.rl_common import load_policy
+
+    path = tmp_path / "g.pt"
+    save_policy(PointerPolicy(n_nodes=3, dim=8, glimpse="unvisited"), path)
+    assert load_policy(path, "drl").mask_glimpse
+    save_policy(PointerPolicy(n_nodes=3, dim=8), path)  # files without the key: glimpse over all
+    assert "glimpse" not in load_policy(path, "drl").config
+    assert not load_policy(path, "drl").mask_glimpse
+    with pytest.raises(InputError, match="glimpse must be one of all, unvisited"):
+        PointerPolicy(n_nodes=3, dim=8, glimpse="some")
 
 
 def test_drl_solvers_feasible_and_sampling_not_worse(tiny_ckpt):

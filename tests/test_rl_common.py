@@ -23,6 +23,7 @@ from solvers.rl_common import (  # noqa: E402
     mirror,
     optimal_heads_batch,
     paper_heads,
+    paper_rule_optimum,
     save_policy,
     tour_cost,
 )
@@ -94,6 +95,22 @@ def test_exact_enumeration_matches_brute_force():
     for i, inst in enumerate(instances):
         brute = run_solver("brute", inst, [0.2, 0.5, 0.7, 1.0][i]).objective
         assert opt[i].item() == pytest.approx(brute, rel=1e-12)
+
+
+def test_paper_rule_optimum_equals_best_enumerated_order():
+    """The recursion over (visited, last cluster, head) equals trying every order with the
+    paper's heads, and is never below the exact optimum."""
+    import itertools
+
+    rng = np.random.default_rng(11)
+    b, k, n = 6, 5, 7
+    env = make_env(generate_batch(rng, b, k, n), rng.uniform(0, 1, b))
+    perms = torch.tensor(list(itertools.permutations(range(k))))
+    rep, orders = env.repeat(len(perms)), perms.repeat(b, 1)
+    enumerated = tour_cost(rep, orders, paper_heads(rep, orders)).view(b, -1).min(1).values
+    got = paper_rule_optimum(env)
+    assert torch.allclose(got, enumerated, rtol=1e-12, atol=0)
+    assert torch.all(got >= exact_by_enumeration(env) * (1 - 1e-12))
 
 
 def test_unequal_clusters_are_padded_without_changing_the_optimum():

@@ -120,6 +120,8 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     assert steps == sorted(set(steps)) and steps[-1] == saved + 10
     meta = json.loads(output_paths(out)["meta"].read_text())
     assert meta["steps_trained"] == saved + 10
+    # the CLI trains drl with the glimpse over unvisited elements, and the command says so
+    assert "--glimpse unvisited" in meta["command"] and meta["config"]["glimpse"] == "unvisited"
 
 
 @pytest.mark.parametrize(("args", "message"), [
@@ -127,6 +129,7 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     (["--clusters", "1"], "at least 2 clusters"),
     (["--omega", "1.5"], "omega must be in [0, 1]"),
     (["--lr", "-1"], "learning rate must be a number"),
+    (["--model", "am", "--glimpse", "all"], "--glimpse is an option of the drl model only"),
 ])
 def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     """Bad training settings: exit 2 with one line, and no file written."""
