@@ -100,14 +100,35 @@ def test_proves_gtsplib_optima(name, best):
     assert r.lower_bound == best
 
 
-def test_time_limit_gives_tour_and_bound():
-    """A K = 20 instance with 1 s: the best tour, a lower bound below it, status time_limit."""
+@pytest.mark.parametrize("time_limit", [0.01, 1.0])
+def test_time_limit_gives_tour_and_bound(time_limit):
+    """A K = 20 instance stopped early (0.01 s: before its first LP; 1 s: in the root loop):
+    the best tour, a lower bound below it, status time_limit."""
     inst = generate_instance(20, 20, seed=1)
-    r = run_solver("milp", inst, 0.5, time_limit=1.0)
+    r = run_solver("milp", inst, 0.5, time_limit=time_limit)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(20))
-    assert r.lower_bound is None or r.lower_bound <= r.objective
-    assert r.runtime_s < 5.0
+    assert r.lower_bound is not None
+    assert 0 < r.lower_bound <= r.objective
+    assert r.runtime_s < time_limit + 4.0
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("depot", [True, False])
+def test_degree_bound_is_below_the_optimum(seed, depot):
+    """The LP-free bound reported when time runs out first never exceeds the brute-force optimum."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(3 if depot else 4, 6))
+    inst = _instance(seed, k, rng.integers(1, 5, size=k).tolist(), depot)
+    omega = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    bound = gm.degree_bound(price(inst, omega))
+    assert 0 < bound <= run_solver("brute", inst, omega).objective * (1 + 1e-12)
+
+
+def test_degree_bound_on_gtsplib():
+    """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
+    bound = gm.degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
+    assert 0.5 * 4040 < bound <= 4040
 
 
 def test_reduced_costs_match_highs():
