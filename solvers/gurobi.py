@@ -93,7 +93,7 @@ class GurobiBackend:
     def solve_lp(self, time_limit: float, cutoff: float = np.inf) -> LpResult:
         """Solve the LP relaxation."""
         grb = self.gp.GRB
-        self.m.Params.TimeLimit = min(time_limit, 1e100)
+        self.m.Params.TimeLimit = min(max(time_limit, 0.0), 1e100)  # left() may be just below 0
         self.m.Params.Cutoff = cutoff if np.isfinite(cutoff) else grb.INFINITY
         self._optimize()
         status = self.m.Status
@@ -114,7 +114,7 @@ class GurobiBackend:
         """Solve the MILP below ``cutoff``, adding ``lazy``'s rows at each integer solution."""
         gp, grb, m = self.gp, self.gp.GRB, self.m
         m.setAttr("VType", self.vars, [grb.BINARY] * len(self.vars))
-        m.Params.TimeLimit = min(time_limit, 1e100)
+        m.Params.TimeLimit = min(max(time_limit, 0.0), 1e100)  # left() may be just below 0
         m.Params.Cutoff = cutoff
         m.Params.MIPGap = 0.0
         m.Params.MIPGapAbs = gap

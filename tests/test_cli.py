@@ -112,13 +112,17 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "not a number": (["solve", str(k4), "-s", "greedy", "-w", "abc"], "not a number: 'abc'"),
         "brute too big": (["solve", str(k4), "-s", "brute", "-p", "max_tours=2"],
                           "brute force would enumerate"),
+        "negative seed": (["solve", str(k4), "-s", "aco", "--seed", "-1"],
+                          "argument --seed: a seed must be an integer >= 0, got -1"),
+        "negative generate seed": (["generate", "-k", "3", "--seed", "-2", "-o", str(tmp_path / "s.json")],
+                                   "a seed must be an integer >= 0, got -2"),
     }
 
 
 @pytest.mark.parametrize("case", [
     "missing file", "malformed", "nan", "empty cluster", "duplicate", "omega", "parameter",
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
-    "brute too big",
+    "brute too big", "negative seed", "negative generate seed",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""

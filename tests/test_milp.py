@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from gtsp_bench.errors import InputError
@@ -28,21 +29,42 @@ def _instance(seed: int, k: int, sizes: list[int], depot: bool) -> Instance:
                     clusters=tuple(c[:s] for c, s in zip(base.clusters, sizes, strict=True)))
 
 
+#: gurobipy with its size-limited licence is an optional extra (``make install`` installs it).
+HAVE_GUROBI = importlib.util.find_spec("gurobipy") is not None
+
+
+@st.composite
+def _sizes(draw):
+    """Cluster sizes: K = 1..5 clusters of 1..4 nodes."""
+    k = draw(st.integers(1, 5))
+    return draw(st.lists(st.integers(1, 4), min_size=k, max_size=k))
+
+
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 10**6), k=st.integers(1, 5), depot=st.booleans(),
-       omega=st.sampled_from([0.0, 0.5, 0.9, 1.0]), data=st.data())
-def test_milp_dp_and_brute_agree(seed, k, depot, omega, data):
-    """Random K = 1..5 (with and without a depot), clusters of 1..4 nodes, four omegas."""
-    sizes = data.draw(st.lists(st.integers(1, 4), min_size=k, max_size=k))
-    inst = _instance(seed, k, sizes, depot)
+@given(seed=st.integers(0, 10**6), sizes=_sizes(), depot=st.booleans(),
+       omega=st.sampled_from([0.0, 0.5, 0.9, 1.0]))
+# K = 1 and 2 and one-node clusters every run, whatever hypothesis draws
+@example(seed=1, sizes=[1], depot=True, omega=0.0)
+@example(seed=2, sizes=[3], depot=False, omega=0.5)
+@example(seed=3, sizes=[1, 4], depot=True, omega=0.9)
+@example(seed=4, sizes=[2, 1], depot=False, omega=1.0)
+@example(seed=5, sizes=[1, 1, 1, 1], depot=False, omega=0.5)
+@example(seed=6, sizes=[4, 1, 3, 1, 2], depot=True, omega=0.9)
+def test_exact_solvers_agree_with_brute(seed, sizes, depot, omega):
+    """Random K = 1..5 (with and without a depot), clusters of 1..4 nodes, four omegas: milp,
+    dp and (when installed) gurobi, with its root proof and with its own MILP search, all
+    find the brute-force optimum."""
+    inst = _instance(seed, len(sizes), sizes, depot)
     brute = run_solver("brute", inst, omega)
-    milp = run_solver("milp", inst, omega)
-    dp = run_solver("dp", inst, omega)
-    assert milp.status == "optimal"
-    assert milp.objective == pytest.approx(brute.objective, rel=1e-9, abs=1e-9)
-    assert dp.objective == pytest.approx(brute.objective, rel=1e-9, abs=1e-9)
-    assert milp.lower_bound <= milp.objective + 1e-9
-    assert milp.lower_bound >= milp.objective - 1.01e-6  # the default abs_gap
+    exact = {"milp": run_solver("milp", inst, omega), "dp": run_solver("dp", inst, omega)}
+    if HAVE_GUROBI:
+        exact["gurobi"] = run_solver("gurobi", inst, omega)
+        exact["gurobi-mip"] = run_solver(get_solver("gurobi", root_rounds=0, lns_trials=0), inst, omega)
+    for name, r in exact.items():
+        assert r.status == "optimal", name
+        assert r.objective == pytest.approx(brute.objective, rel=1e-9, abs=1e-9), name
+        assert r.lower_bound <= r.objective + 1e-9, name
+        assert r.lower_bound >= r.objective - 1.01e-6, name  # the default abs_gap
 
 
 @pytest.mark.parametrize("options", [
@@ -78,14 +100,35 @@ def test_proves_gtsplib_optima(name, best):
     assert r.lower_bound == best
 
 
-def test_time_limit_gives_tour_and_bound():
-    """A K = 20 instance with 1 s: the best tour, a lower bound below it, status time_limit."""
+@pytest.mark.parametrize("time_limit", [0.01, 1.0])
+def test_time_limit_gives_tour_and_bound(time_limit):
+    """A K = 20 instance stopped early (0.01 s: before its first LP; 1 s: in the root loop):
+    the best tour, a lower bound below it, status time_limit."""
     inst = generate_instance(20, 20, seed=1)
-    r = run_solver("milp", inst, 0.5, time_limit=1.0)
+    r = run_solver("milp", inst, 0.5, time_limit=time_limit)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(20))
-    assert r.lower_bound is None or r.lower_bound <= r.objective
-    assert r.runtime_s < 5.0
+    assert r.lower_bound is not None
+    assert 0 < r.lower_bound <= r.objective
+    assert r.runtime_s < time_limit + 4.0
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("depot", [True, False])
+def test_degree_bound_is_below_the_optimum(seed, depot):
+    """The LP-free bound reported when time runs out first never exceeds the brute-force optimum."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(3 if depot else 4, 6))
+    inst = _instance(seed, k, rng.integers(1, 5, size=k).tolist(), depot)
+    omega = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    bound = gm.degree_bound(price(inst, omega))
+    assert 0 < bound <= run_solver("brute", inst, omega).objective * (1 + 1e-12)
+
+
+def test_degree_bound_on_gtsplib():
+    """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
+    bound = gm.degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
+    assert 0.5 * 4040 < bound <= 4040
 
 
 def test_reduced_costs_match_highs():

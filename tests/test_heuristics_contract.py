@@ -1,0 +1,54 @@
+"""Issue 4's bad-input and time-limit contract, for every heuristic through the CLI."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+
+import pytest
+
+from gtsp_bench.cli import main
+
+HEURISTICS = ["greedy+ls", "aco", "aco+ls", "lns"]
+if importlib.util.find_spec("pyvrp") is not None:
+    HEURISTICS.append("pyvrp")
+
+
+@pytest.fixture
+def k12(tmp_path, capsys):
+    """A generated K = 12, N = 10 instance file."""
+    path = tmp_path / "k12.json"
+    assert main(["generate", "-k", "12", "-n", "10", "--seed", "4", "-o", str(path)]) == 0
+    capsys.readouterr()
+    return path
+
+
+@pytest.mark.parametrize("solver, args, message", [
+    *[(s, ["-p", "ants=0"], "ants must be an integer >= 1, got 0") for s in ("aco", "aco+ls")],
+    *[(s, ["-p", "ants=-5"], "ants must be an integer >= 1, got -5") for s in ("aco", "aco+ls")],
+    *[(s, ["-p", "rho=0"], "rho must be a number in (0, 1], got 0") for s in ("aco", "aco+ls")],
+    *[(s, ["-p", "rho=1.5"], "rho must be a number in (0, 1], got 1.5") for s in ("aco", "aco+ls")],
+    *[(s, ["-p", "rho=-0.1"], "rho must be a number in (0, 1], got -0.1") for s in ("aco", "aco+ls")],
+    *[(s, ["--time-limit", "-1"], "time limit must be > 0 seconds, got -1.0") for s in HEURISTICS],
+])
+def test_invalid_parameters_exit_2(capsys, k12, solver, args, message):
+    """One error line naming the parameter, nothing on stdout, exit code 2."""
+    assert main(["solve", str(k12), "--solver", solver, *args]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.strip().splitlines() == [f"gtsp-bench: error: {message}"]
+
+
+def test_rho_one_is_allowed(capsys, k12):
+    """rho = 1 is inside (0, 1]."""
+    assert main(["solve", str(k12), "--solver", "aco", "-p", "rho=1", "-p", "iterations=2"]) == 0
+
+
+@pytest.mark.parametrize("solver", HEURISTICS)
+def test_time_limit_hit_returns_best_tour(capsys, k12, solver):
+    """A limit far too short: still a feasible tour (checked by the evaluator), status time_limit."""
+    assert main(["solve", str(k12), "--solver", solver, "--time-limit", "1e-6", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["status"] == "time_limit"
+    assert sorted(result["order"]) == list(range(12))
+    assert result["objective"] > 0
