@@ -94,6 +94,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     infeasible = tmp_path / "infeasible.json"
     infeasible.write_text('{"order": [0, 0, 1, 2], "heads": [0, 0, 0, 0]}')
     missing = tmp_path / "missing.json"
+    folder = tmp_path / "folder.json"
+    folder.mkdir()
     return {
         "missing file": (["solve", str(missing), "-s", "greedy"], f"{missing}: no such file"),
         "malformed": (["solve", str(malformed), "-s", "greedy"], f"{malformed}: invalid JSON"),
@@ -112,13 +114,17 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "not a number": (["solve", str(k4), "-s", "greedy", "-w", "abc"], "not a number: 'abc'"),
         "brute too big": (["solve", str(k4), "-s", "brute", "-p", "max_tours=2"],
                           "brute force would enumerate"),
+        "output is a folder": (["solve", str(k4), "-s", "greedy", "-o", str(folder)],
+                               f"{folder}: cannot write"),
+        "generate onto a folder": (["generate", "-k", "3", "-o", str(folder)],
+                                   f"{folder}: cannot write"),
     }
 
 
 @pytest.mark.parametrize("case", [
     "missing file", "malformed", "nan", "empty cluster", "duplicate", "omega", "parameter",
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
-    "brute too big",
+    "brute too big", "output is a folder", "generate onto a folder",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""
