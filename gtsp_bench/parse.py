@@ -41,6 +41,10 @@ def _strict_json(text: str) -> Any:
         return json.loads(text, parse_constant=reject)
     except json.JSONDecodeError as e:
         raise InputError(f"invalid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    except InputError:
+        raise
+    except (ValueError, RecursionError) as e:  # an integer of > 4300 digits, absurd nesting
+        raise InputError(f"invalid JSON: {str(e).split(':')[0]}") from None
 
 
 def _point(value: Any, where: str) -> list[float]:
@@ -50,9 +54,13 @@ def _point(value: Any, where: str) -> list[float]:
         or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
     ):
         raise InputError(f"{where} must be a pair of numbers [x, y], got {value!r}")
-    if not all(math.isfinite(v) for v in value):
+    try:
+        point = [float(v) for v in value]
+    except OverflowError:  # an integer literal too large for a float
+        point = [math.inf]
+    if not all(math.isfinite(v) for v in point):
         raise InputError(f"{where} has a NaN or infinite coordinate")
-    return [float(v) for v in value]
+    return point
 
 
 def instance_from_dict(data: Any, default_name: str = "instance") -> Instance:

@@ -93,6 +93,10 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     param.write_text('{"depot": [0, 0], "clusters": [[[0, 1]]], "params": {"speed": 3}}')
     infeasible = tmp_path / "infeasible.json"
     infeasible.write_text('{"order": [0, 0, 1, 2], "heads": [0, 0, 0, 0]}')
+    huge = tmp_path / "huge.json"
+    huge.write_text('{"order": [0, 1, 2, 3%s], "heads": [0, 0, 0, 0]}' % ("0" * 30))
+    bigint = tmp_path / "bigint.json"
+    bigint.write_text('{"depot": [0, 0], "clusters": [[[0, 1%s]]]}' % ("0" * 400))
     missing = tmp_path / "missing.json"
     folder = tmp_path / "folder.json"
     folder.mkdir()
@@ -114,6 +118,10 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "not a number": (["solve", str(k4), "-s", "greedy", "-w", "abc"], "not a number: 'abc'"),
         "brute too big": (["solve", str(k4), "-s", "brute", "-p", "max_tours=2"],
                           "brute force would enumerate"),
+        "huge index": (["evaluate", str(k4), "--solution", str(huge)],
+                       f"{huge}: infeasible solution: order holds an integer far outside"),
+        "huge coordinate": (["solve", str(bigint), "-s", "greedy"],
+                            f"{bigint}: clusters[0][0] has a NaN or infinite coordinate"),
         "output is a folder": (["solve", str(k4), "-s", "greedy", "-o", str(folder)],
                                f"{folder}: cannot write"),
         "generate onto a folder": (["generate", "-k", "3", "-o", str(folder)],
@@ -124,7 +132,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
 @pytest.mark.parametrize("case", [
     "missing file", "malformed", "nan", "empty cluster", "duplicate", "omega", "parameter",
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
-    "brute too big", "output is a folder", "generate onto a folder",
+    "brute too big", "output is a folder", "generate onto a folder", "huge index",
+    "huge coordinate",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""

@@ -55,6 +55,10 @@ def test_json_depot_may_be_null():
         ('{"clusters": [[[1, NaN]]]}', "NaN is not a number"),
         ('{"clusters": [[[1, Infinity]]]}', "Infinity is not a number"),
         ('{"clusters": [[[1, 1e999]]]}', "NaN or infinite"),
+        ('{"clusters": [[[1, 1%s]]]}' % ("0" * 400), "NaN or infinite"),  # int beyond float
+        ('{"clusters": [[[1, 1%s]]]}' % ("0" * 5000), "invalid JSON: Exceeds the limit"),
+        ("[" * 100_000 + "]" * 100_000, "invalid JSON: maximum recursion depth"),
+        (_text(params={"height": 10**400}), "'height' must be finite, got an integer too large"),
         (_text(depot=[1]), "depot must be a pair"),
         (_text(params={"hieght": 1}), "unknown energy parameter 'hieght'"),
         (_text(params={"height": -1}), "'height' must be > 0"),
@@ -76,6 +80,8 @@ def test_solution_parsing():
         parse_solution('{"order": [0]}')
     with pytest.raises(InputError, match="'order' must be a list of integers"):
         parse_solution('{"order": [0.5], "heads": [0]}')
+    with pytest.raises(InputError, match="invalid JSON: Exceeds the limit"):
+        parse_solution('{"order": [1%s], "heads": [0]}' % ("0" * 5000))
 
 
 @pytest.mark.parametrize("path", gtsplib_files(), ids=lambda p: p.stem)
