@@ -133,6 +133,8 @@ def test_separator_variants_and_wrapped_sets():
         ("DIMENSION: 4", "DIMENSION: four", "DIMENSION must be an integer"),
         ("2 2 4 -1", "2 2 9 -1", "names node 9, outside 1..4"),
         ("GTSP_SETS: 2\n", "", "missing GTSP_SETS"),
+        # A DIMENSION far beyond the file is reported, not allocated (this once asked for 1.5 TiB).
+        ("DIMENSION: 4", "DIMENSION: 100000000000", "node 5 has no coordinates"),
     ],
 )
 def test_bad_gtsplib_text(old, new, message):
@@ -146,6 +148,12 @@ EXPLICIT = "\n".join([
     "EDGE_WEIGHT_FORMAT: FULL_MATRIX", "EDGE_WEIGHT_SECTION", "0 1 2", "1 0 3", "2 3 0",
     "GTSP_SET_SECTION", "1 3 -1", "2 1 2 -1", "EOF", "",
 ])
+
+
+def test_explicit_with_a_huge_dimension_is_refused_without_allocating():
+    """With no coordinates, the set section alone shows that DIMENSION lies."""
+    with pytest.raises(InputError, match="node 4 is in no set"):
+        parse_gtsp(EXPLICIT.replace("DIMENSION: 3", "DIMENSION: 100000000000"))
 
 
 def test_explicit_full_matrix_round_trip():
