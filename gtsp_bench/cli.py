@@ -55,6 +55,13 @@ def _int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
 
 
+def _seed(text: str) -> int:
+    value = _int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a seed must be an integer >= 0, got {value}")
+    return value
+
+
 def _key_value(text: str) -> tuple[str, Any]:
     key, sep, raw = text.partition("=")
     if not sep or not key:
@@ -89,7 +96,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--clusters", "-k", type=_int, required=True, metavar="K", help="number of clusters")
     p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N",
                    help="nodes per cluster (default: 20)")
-    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed (default: 0)")
     p.add_argument("--zeta", type=_float, default=50.0, metavar="Z",
                    help="cluster half-width in m (default: 50)")
     p.add_argument("--area", type=_float, default=1000.0, metavar="A",
@@ -108,7 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "ignored for .gtsp)")
     p.add_argument("--time-limit", "-t", type=_float, default=DEFAULT_TIME_LIMIT, metavar="S",
                    help=f"time limit in seconds (default: {DEFAULT_TIME_LIMIT:g})")
-    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed (default: 0)")
     p.add_argument("--param", "-p", type=_key_value, action="append", default=[],
                    metavar="KEY=VALUE", help="solver option, repeatable (e.g. -p ants=50)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
@@ -136,7 +143,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--steps", type=_int, default=40_000, help="training steps (default: 40000)")
     p.add_argument("--batch", type=_int, default=256, help="instances per step (default: 256)")
     p.add_argument("--lr", type=_float, default=1e-4, help="Adam learning rate (default: 1e-4)")
-    p.add_argument("--seed", type=_int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed (default: 0)")
     p.add_argument("--omega", "-w", type=_float, default=None, metavar="W",
                    help="train for one omega (default: omega uniform in [0, 1] per instance)")
     p.add_argument("--heads", choices=("paper", "optimal"), default=None,

@@ -128,8 +128,16 @@ def generate_instance(
         Energy parameters stored in the instance (defaults if ``None``).
     name
         Instance name; by default ``uav-K{K}-N{N}-s{seed}``.
+
+    Raises
+    ------
+    InputError
+        Settings that cannot give an instance, or a negative or non-integer seed.
     """
-    rng = np.random.default_rng(seed)
+    try:
+        rng = np.random.default_rng(seed)
+    except (TypeError, ValueError):
+        raise InputError(f"seed must be an integer >= 0 or a sequence of them, got {seed!r}") from None
     coords = np.round(generate_batch(rng, 1, n_clusters, n_nodes, zeta, area)[0], 3)
     seed_text = "-".join(str(s) for s in np.atleast_1d(seed))
     return Instance(

@@ -12,6 +12,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+import numbers
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -265,7 +266,7 @@ def run_solver(
     Raises
     ------
     InputError
-        Bad omega or time limit, or an unknown solver name.
+        Bad omega, time limit or seed, or an unknown solver name.
     SolverError
         The solver failed, or returned an infeasible solution, an unknown status, a claimed
         objective the evaluator does not confirm, or a lower bound above the objective.
@@ -276,6 +277,8 @@ def run_solver(
     name = name or type(solver).__name__
     w = check_omega(omega) if instance.is_uav else None
     time_limit = check_time_limit(time_limit)
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
     start = time.perf_counter()
     sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
     runtime = time.perf_counter() - start

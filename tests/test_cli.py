@@ -119,6 +119,12 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "impossible generator": (["generate", "-k", "80", "-o", str(tmp_path / "g.json")],
                                  "would cover"),
         "not a number": (["solve", str(k4), "-s", "greedy", "-w", "abc"], "not a number: 'abc'"),
+        "negative seed (solve)": (["solve", str(k4), "-s", "aco", "--seed", "-1"],
+                                  "a seed must be an integer >= 0, got -1"),
+        "negative seed (generate)": (["generate", "-k", "3", "--seed", "-2", "-o", str(missing)],
+                                     "a seed must be an integer >= 0, got -2"),
+        "negative seed (train)": (["train", "--seed", "-3", "-o", str(tmp_path / "p.pt")],
+                                  "a seed must be an integer >= 0, got -3"),
         "brute too big": (["solve", str(k4), "-s", "brute", "-p", "max_tours=2"],
                           "brute force would enumerate"),
         "huge index": (["evaluate", str(k4), "--solution", str(huge)],
@@ -136,7 +142,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     "missing file", "malformed", "nan", "empty cluster", "duplicate", "omega", "parameter",
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
     "brute too big", "output is a folder", "generate onto a folder", "huge index",
-    "huge coordinate", "huge dimension",
+    "huge coordinate", "huge dimension", "negative seed (solve)", "negative seed (generate)",
+    "negative seed (train)",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""

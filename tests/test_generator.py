@@ -58,6 +58,13 @@ def test_bad_arguments(bad):
         generate_instance(args["n_clusters"], args["n_nodes"], seed=0, zeta=args["zeta"])
 
 
+@pytest.mark.parametrize("seed", [-1, [3, -1], 1.5, "7"])
+def test_bad_seed_is_an_input_error(seed):
+    """numpy's own error (a ValueError or TypeError) becomes an InputError naming the seed."""
+    with pytest.raises(InputError, match="seed must be an integer >= 0"):
+        generate_instance(3, 4, seed=seed)
+
+
 def test_centres_are_two_zeta_apart_along_some_axis():
     """The centres themselves satisfy the non-overlap rule max(|dx|, |dy|) >= 2 zeta."""
     from gtsp_bench.generator import generate_centres

@@ -83,11 +83,14 @@ def test_harness_rejects_what_the_evaluator_does_not_confirm(tiny, kwargs, messa
 
 
 def test_harness_checks_omega_and_time_limit(tiny):
-    """Bad omega or time limit are input errors raised before solving."""
+    """Bad omega, time limit or seed are input errors raised before solving."""
     with pytest.raises(InputError, match="omega"):
         run_solver(Fixed(), tiny, 2.0)
     with pytest.raises(InputError, match="time limit must be > 0"):
         run_solver(Fixed(), tiny, 0.5, time_limit=-1)
+    for seed in (-1, 1.5, True):
+        with pytest.raises(InputError, match="seed must be an integer >= 0"):
+            run_solver(Fixed(), tiny, 0.5, seed=seed)
 
 
 def test_result_json_shape(tiny):

@@ -78,6 +78,7 @@ def test_reference_resolution():
     (["--jobs", "0"], "jobs must be an integer >= 1"),
     (["--time-limit", "0"], "time limit must be > 0"),
     (["--instances", "0"], "number of instances must be an integer >= 1"),
+    (["--seed", "-1"], "seed must be an integer >= 0, got -1"),
     (["--report-only"], "no experiment CSV files to report on"),
 ])
 def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
