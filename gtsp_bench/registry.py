@@ -146,6 +146,20 @@ class SolverSpec:
     description: str
     bench: bool = True
 
+    def import_path(self) -> str | None:
+        """``"module:Class"`` by which a fresh process (a runner worker) can import the class.
+
+        ``None`` for a class that only exists in this process: one defined in ``__main__`` or
+        inside a function.
+        """
+        if isinstance(self.target, str):
+            return self.target
+        module = getattr(self.target, "__module__", None)
+        qualname = getattr(self.target, "__qualname__", "")
+        if not module or module == "__main__" or "." in qualname:
+            return None
+        return f"{module}:{qualname}"
+
     def load(self) -> type:
         """Import and return the solver class."""
         if not isinstance(self.target, str):

@@ -423,7 +423,7 @@ def run_solver_tasks(
     from gtsp_bench.registry import solver_specs
 
     spec = next(s for s in solver_specs() if s.name == solver)
-    target = spec.target if isinstance(spec.target, str) else None
+    target = spec.import_path()  # a solver registered by class is re-registered in the workers
     by_key = {t.key: t for t in tasks}
     return run_jobs(solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks],
                     jobs, hard_limit, lambda key, rec, persist: on_record(by_key[key], rec, persist))

@@ -107,3 +107,19 @@ def test_bench_flag():
 
     flags = {s.name: s.bench for s in solver_specs()}
     assert flags["brute"] is False and flags["greedy"] is True
+
+
+def test_import_path_for_worker_processes():
+    """A string target is its own path; a module-level class gets module:Class; a class that only
+    exists in this process (defined in a function, or in __main__) has none."""
+    from gtsp_bench.registry import SolverSpec
+
+    assert SolverSpec("g", "solvers.greedy:Greedy", "").import_path() == "solvers.greedy:Greedy"
+    assert SolverSpec("f", Fixed, "").import_path() == "tests.test_registry:Fixed"
+
+    class Local(Fixed):
+        pass
+
+    assert SolverSpec("l", Local, "").import_path() is None
+    Local.__module__, Local.__qualname__ = "__main__", "Local"
+    assert SolverSpec("m", Local, "").import_path() is None

@@ -275,3 +275,26 @@ def test_task_log_drops_torn_line(tmp_path):
     log.close()
     records = log.load()
     assert records["a"]["v"] == 2 and len(log.path.read_text().splitlines()) == 3
+
+
+def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
+    """README: outside the repository, register_solver(name, YourClass, ...) and the runner uses
+    it. A class from an importable module runs in the workers; one defined inside a function
+    cannot be imported there and gives 'failed' rows that say why (not 'unknown solver')."""
+    from gtsp_bench.registry import register_solver
+
+    def local_class():
+        class Local(runner_solvers.FixedTour):
+            pass
+
+        return Local
+
+    register_solver("t-by-class", runner_solvers.FixedTour, "by class", bench=False, replace=True)
+    register_solver("t-local-class", local_class(), "local class", bench=False, replace=True)
+    config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=2,
+                     solvers="t-by-class,t-local-class")
+    run_bench(config, log=lambda m: None)
+    by = {s: g for s, g in pd.read_csv(tmp_path / "out" / "ratio-k.csv").groupby("solver")}
+    assert (by["t-by-class"]["status"] == "feasible").all(), by["t-by-class"]["note"].tolist()
+    assert (by["t-local-class"]["status"] == "failed").all()
+    assert by["t-local-class"]["note"].str.contains("a worker process cannot import").all()
