@@ -102,17 +102,18 @@ def _check_png(path: Path) -> None:
 
 
 def test_quick_mode_end_to_end(tmp_path, capsys):
-    """--quick with the default solvers writes every CSV (documented columns, one row per
-    instance x omega x solver, sane ratios), a valid PNG per experiment and the report."""
+    """--quick exactly as `make bench-quick` runs it (default solvers, N = 20, the shipped
+    checkpoints) writes every CSV (documented columns, one row per instance x omega x solver,
+    no failed solve, sane ratios), a valid PNG per experiment and the report."""
     ckpt = tmp_path / "ckpt"
     ckpt.mkdir()
     (ckpt / "toy.train.csv").write_text(
         "step,loss,reward,val_energy,wall_s,extra\n0,5.0,-3000,3100,0.1,1\n10,2.0,-2900,3000,1.0,1\n")
-    code = main(["bench", "--quick", "--nodes", "5", "--jobs", "2", *_dirs(tmp_path)])
+    code = main(["bench", "--quick", "--jobs", "2", *_dirs(tmp_path)])
     err = capsys.readouterr().err
     assert code == 0, err
     out = tmp_path / "out"
-    config = _config(tmp_path, quick=True, n_nodes=5)
+    config = _config(tmp_path, quick=True, n_nodes=20)
     n_solvers = len(set(config.solvers) | set(config.references.values()))
     for exp in ("ratio-omega", "ratio-k", "runtime", "trajectories"):
         df = pd.read_csv(out / f"{exp}.csv")
@@ -122,8 +123,8 @@ def test_quick_mode_end_to_end(tmp_path, capsys):
         assert not df.duplicated(["instance", "omega", "solver"]).any()
         ref = df[df["solver"] == df["reference"]]
         assert (ref["status"] == "optimal").all() and np.allclose(ref["ratio"], 1.0)
-        ok = df[df["status"] != "failed"]
-        assert (ok["ratio"] >= 1 - 1e-9).all() and (ok["runtime_s"] >= 0).all()
+        assert set(df["status"]) <= {"optimal", "feasible"}, df[["solver", "note"]].drop_duplicates()
+        assert (df["ratio"] >= 1 - 1e-9).all() and (df["runtime_s"] >= 0).all()
         greedy = df[df["solver"] == "greedy"]
         assert len(greedy) and (greedy["status"] == "feasible").all()
         _check_png(out / f"{exp}.png")
