@@ -89,6 +89,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     dup = tmp_path / "dup.gtsp"
     dup.write_text("NAME: d\nTYPE: GTSP\nDIMENSION: 2\nGTSP_SETS: 2\nEDGE_WEIGHT_TYPE: EUC_2D\n"
                    "NODE_COORD_SECTION\n1 0 0\n2 1 1\nGTSP_SET_SECTION\n1 1 2 -1\n2 2 -1\nEOF\n")
+    empty_set = tmp_path / "empty-set.gtsp"
+    empty_set.write_text(dup.read_text().replace("2 2 -1", "2 -1"))
     dim = tmp_path / "dim.gtsp"
     dim.write_text(dup.read_text().replace("DIMENSION: 2", "DIMENSION: 100000000000"))
     param = tmp_path / "param.json"
@@ -107,6 +109,7 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "malformed": (["solve", str(malformed), "-s", "greedy"], f"{malformed}: invalid JSON"),
         "nan": (["solve", str(nan), "-s", "greedy"], f"{nan}: invalid JSON: NaN is not a number"),
         "empty cluster": (["solve", str(empty), "-s", "greedy"], f"{empty}: clusters[1] is empty"),
+        "empty .gtsp set": (["solve", str(empty_set), "-s", "greedy"], f"{empty_set}: set 2 is empty"),
         "duplicate": (["solve", str(dup), "-s", "greedy"], f"{dup}: node 2 is in set 1 and in set 2"),
         "huge dimension": (["solve", str(dim), "-s", "greedy"], f"{dim}: node 3 has no coordinates"),
         "omega": (["solve", str(k4), "-s", "greedy", "-w", "1.5"], "omega must be in [0, 1]"),
@@ -143,7 +146,7 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
     "brute too big", "output is a folder", "generate onto a folder", "huge index",
     "huge coordinate", "huge dimension", "negative seed (solve)", "negative seed (generate)",
-    "negative seed (train)",
+    "negative seed (train)", "empty .gtsp set",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""

@@ -133,6 +133,7 @@ def test_separator_variants_and_wrapped_sets():
         ("DIMENSION: 4", "DIMENSION: four", "DIMENSION must be an integer"),
         ("2 2 4 -1", "2 2 9 -1", "names node 9, outside 1..4"),
         ("GTSP_SETS: 2\n", "", "missing GTSP_SETS"),
+        ("2 2 4 -1", "2 2 4 -1\n3 -1", "set 3 is empty"),
         # A DIMENSION far beyond the file is reported, not allocated (this once asked for 1.5 TiB).
         ("DIMENSION: 4", "DIMENSION: 100000000000", "node 5 has no coordinates"),
     ],
