@@ -13,6 +13,7 @@ import importlib
 import inspect
 import math
 import numbers
+import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -149,8 +150,8 @@ class SolverSpec:
     def import_path(self) -> str | None:
         """``"module:Class"`` by which a fresh process (a runner worker) can import the class.
 
-        ``None`` for a class that only exists in this process: one defined in ``__main__`` or
-        inside a function.
+        ``None`` for a class that only exists in this process: one defined in ``__main__``,
+        inside a function, or by ``exec``.
         """
         if isinstance(self.target, str):
             return self.target
@@ -158,6 +159,8 @@ class SolverSpec:
         qualname = getattr(self.target, "__qualname__", "")
         if not module or module == "__main__" or "." in qualname:
             return None
+        if getattr(sys.modules.get(module), qualname, None) is not self.target:
+            return None  # e.g. a class made by exec(): its module does not hold it
         return f"{module}:{qualname}"
 
     def load(self) -> type:

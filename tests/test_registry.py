@@ -123,3 +123,5 @@ def test_import_path_for_worker_processes():
     assert SolverSpec("l", Local, "").import_path() is None
     Local.__module__, Local.__qualname__ = "__main__", "Local"
     assert SolverSpec("m", Local, "").import_path() is None
+    Local.__module__ = "builtins"  # what exec() gives a class; builtins has no Local
+    assert SolverSpec("e", Local, "").import_path() is None
