@@ -185,7 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="instances per K (default: 30; quick: 3)")
     p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N",
                    help="nodes per cluster (default: 20)")
-    p.add_argument("--seed", type=_seed, default=1, help="instance-set seed (default: 1)")
+    p.add_argument("--seed", type=_int, default=1, help="instance-set seed (default: 1)")
     p.add_argument("--time-limit", "-t", type=_float, default=10.0, metavar="S",
                    help="per-solve time limit in seconds (default: 10)")
     p.add_argument("--jobs", "-j", type=_int, metavar="J",

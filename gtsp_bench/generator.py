@@ -36,10 +36,12 @@ def check_generator_args(n_clusters: int, n_nodes: int, zeta: float, area: float
         raise InputError(f"number of nodes per cluster must be an integer >= 1, got {n_nodes!r}")
     if not np.isfinite(zeta) or zeta <= 0:
         raise InputError(f"zeta must be > 0, got {zeta!r}")
-    if not np.isfinite(area) or area <= 2 * zeta:
+    if not np.isfinite(area):
+        raise InputError(f"area must be a finite length in m, got {area!r}")
+    if area <= 2 * zeta:
         raise InputError(f"area {area!r} m must exceed 2 * zeta = {2 * zeta!r} m")
     cover = n_clusters * (2 * zeta) ** 2 / area**2
-    if cover > MAX_COVER:
+    if n_clusters > 1 and cover > MAX_COVER:  # one cluster always fits once area > 2 zeta
         raise InputError(
             f"{n_clusters} clusters of half-width zeta = {zeta:g} m would cover {cover:.0%} of a "
             f"{area:g} m square area; at most {MAX_COVER:.0%} can be placed without overlap "
@@ -128,8 +130,16 @@ def generate_instance(
         Energy parameters stored in the instance (defaults if ``None``).
     name
         Instance name; by default ``uav-K{K}-N{N}-s{seed}``.
+
+    Raises
+    ------
+    InputError
+        Settings that cannot give an instance, or a negative or non-integer seed.
     """
-    rng = np.random.default_rng(seed)
+    try:
+        rng = np.random.default_rng(seed)
+    except (TypeError, ValueError):
+        raise InputError(f"seed must be an integer >= 0 or a sequence of them, got {seed!r}") from None
     coords = np.round(generate_batch(rng, 1, n_clusters, n_nodes, zeta, area)[0], 3)
     seed_text = "-".join(str(s) for s in np.atleast_1d(seed))
     return Instance(

@@ -206,7 +206,10 @@ def _as_int_array(values: Sequence[int], what: str) -> np.ndarray:
     for v in seq:
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
             raise InfeasibleSolutionError(f"{what} must be a list of integers, got {v!r}")
-    return np.asarray(seq, dtype=np.int64).reshape(-1)
+    try:
+        return np.asarray(seq, dtype=np.int64).reshape(-1)
+    except OverflowError:
+        raise InfeasibleSolutionError(f"{what} holds an integer far outside any index") from None
 
 
 # ---------------------------------------------------------------------- distances

@@ -99,7 +99,12 @@ class EnergyParams:
             value = getattr(self, f.name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise InputError(f"energy parameter {f.name!r} must be a number, got {value!r}")
-            if not math.isfinite(value):
+            try:
+                finite = math.isfinite(value)
+            except OverflowError:
+                raise InputError(f"energy parameter {f.name!r} must be finite, got an integer "
+                                 f"too large for a float") from None
+            if not finite:
                 raise InputError(f"energy parameter {f.name!r} must be finite, got {value!r}")
             if f.name in _POSITIVE and value <= 0:
                 raise InputError(f"energy parameter {f.name!r} must be > 0, got {value!r}")

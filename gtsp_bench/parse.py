@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -41,6 +41,10 @@ def _strict_json(text: str) -> Any:
         return json.loads(text, parse_constant=reject)
     except json.JSONDecodeError as e:
         raise InputError(f"invalid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    except InputError:
+        raise
+    except (ValueError, RecursionError) as e:  # an integer of > 4300 digits, absurd nesting
+        raise InputError(f"invalid JSON: {str(e).split(':')[0]}") from None
 
 
 def _point(value: Any, where: str) -> list[float]:
@@ -50,9 +54,13 @@ def _point(value: Any, where: str) -> list[float]:
         or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
     ):
         raise InputError(f"{where} must be a pair of numbers [x, y], got {value!r}")
-    if not all(math.isfinite(v) for v in value):
+    try:
+        point = [float(v) for v in value]
+    except OverflowError:  # an integer literal too large for a float
+        point = [math.inf]
+    if not all(math.isfinite(v) for v in point):
         raise InputError(f"{where} has a NaN or infinite coordinate")
-    return [float(v) for v in value]
+    return point
 
 
 def instance_from_dict(data: Any, default_name: str = "instance") -> Instance:
@@ -241,8 +249,7 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
         if ewt == "EXPLICIT":
             return None
         raise InputError("missing NODE_COORD_SECTION")
-    coords = np.full((dim, 2), np.nan)
-    seen = np.zeros(dim, dtype=bool)
+    points: dict[int, tuple[float, float]] = {}
     for line in lines:
         parts = line.split()
         try:
@@ -251,15 +258,25 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
             raise InputError(f"bad coordinate line {line!r}") from None
         if not 1 <= node <= dim:
             raise InputError(f"node {node} is outside 1..{dim} (DIMENSION)")
-        if seen[node - 1]:
+        if node in points:
             raise InputError(f"node {node} has two coordinate lines")
         if not (math.isfinite(x) and math.isfinite(y)):
             raise InputError(f"node {node} has a NaN or infinite coordinate")
-        coords[node - 1] = (x, y)
-        seen[node - 1] = True
-    if not seen.all():
-        raise InputError(f"node {int(np.flatnonzero(~seen)[0]) + 1} has no coordinates")
+        points[node] = (x, y)
+    if len(points) < dim:  # checked before allocating: DIMENSION may be far too large
+        raise InputError(f"node {_first_missing(points)} has no coordinates")
+    coords = np.empty((dim, 2))
+    coords[np.fromiter(points, dtype=np.int64, count=dim) - 1] = list(points.values())
     return coords
+
+
+def _first_missing(present: Iterable[int]) -> int:
+    """The smallest id >= 1 that is not in ``present``."""
+    ids = sorted(present)
+    for expected, node in enumerate(ids, start=1):
+        if node != expected:
+            return expected
+    return len(ids) + 1
 
 
 def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarray]:
@@ -272,7 +289,7 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
         except ValueError:
             raise InputError(f"bad set line {line!r}") from None
     sets: dict[int, list[int]] = {}
-    owner = np.zeros(dim, dtype=np.int64)
+    owner: dict[int, int] = {}  # node (0-based) -> set id; a dict: DIMENSION may be far too large
     i = 0
     while i < len(tokens):
         set_id = tokens[i]
@@ -284,7 +301,7 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
             node = tokens[i]
             if not 1 <= node <= dim:
                 raise InputError(f"set {set_id} names node {node}, outside 1..{dim}")
-            if owner[node - 1]:
+            if node - 1 in owner:
                 raise InputError(f"node {node} is in set {owner[node - 1]} and in set {set_id}")
             owner[node - 1] = set_id
             members.append(node - 1)
@@ -297,8 +314,8 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
         sets[set_id] = members
     if len(sets) != n_sets:
         raise InputError(f"GTSP_SETS says {n_sets} sets but GTSP_SET_SECTION has {len(sets)}")
-    if not owner.all():
-        raise InputError(f"node {int(np.flatnonzero(owner == 0)[0]) + 1} is in no set")
+    if len(owner) < dim:
+        raise InputError(f"node {_first_missing(n + 1 for n in owner)} is in no set")
     return [np.array(sets[s]) for s in sorted(sets)]
 
 

@@ -91,9 +91,16 @@ def worker_main(fd: int) -> None:
     conn = Connection(fd)
     try:
         name, target, description = conn.recv()
+        from gtsp_bench.errors import InputError
         from gtsp_bench.registry import get_solver, register_solver, solver_names
 
-        if name not in solver_names() and target is not None:
+        if name not in solver_names():
+            if target is None:
+                raise InputError(
+                    f"solver {name!r} was registered by a class that a worker process cannot "
+                    f"import (defined in __main__ or inside a function); register it by a "
+                    f"'module:Class' string or a class from an importable module"
+                )
             register_solver(name, target, description)
         solver = get_solver(name)
         _limit_threads()
@@ -175,8 +182,9 @@ def run_jobs(
     Parameters
     ----------
     solver, target, description
-        The registered name, its ``"module:Class"`` target (registered in the worker if needed;
-        ``None`` for built-ins) and description.
+        The registered name, its ``"module:Class"`` import path (registered in the worker when
+        the worker does not know the name; ``None`` when the class cannot be imported there) and
+        its description.
     n_workers
         Worker processes to use (at most one per job).
     hard_limit

@@ -12,6 +12,8 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+import numbers
+import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -145,6 +147,22 @@ class SolverSpec:
     description: str
     bench: bool = True
 
+    def import_path(self) -> str | None:
+        """``"module:Class"`` by which a fresh process (a runner worker) can import the class.
+
+        ``None`` for a class that only exists in this process: one defined in ``__main__``,
+        inside a function, or by ``exec``.
+        """
+        if isinstance(self.target, str):
+            return self.target
+        module = getattr(self.target, "__module__", None)
+        qualname = getattr(self.target, "__qualname__", "")
+        if not module or module == "__main__" or "." in qualname:
+            return None
+        if getattr(sys.modules.get(module), qualname, None) is not self.target:
+            return None  # e.g. a class made by exec(): its module does not hold it
+        return f"{module}:{qualname}"
+
     def load(self) -> type:
         """Import and return the solver class."""
         if not isinstance(self.target, str):
@@ -265,7 +283,7 @@ def run_solver(
     Raises
     ------
     InputError
-        Bad omega or time limit, or an unknown solver name.
+        Bad omega, time limit or seed, or an unknown solver name.
     SolverError
         The solver failed, or returned an infeasible solution, an unknown status, a claimed
         objective the evaluator does not confirm, or a lower bound above the objective.
@@ -276,6 +294,8 @@ def run_solver(
     name = name or type(solver).__name__
     w = check_omega(omega) if instance.is_uav else None
     time_limit = check_time_limit(time_limit)
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
     start = time.perf_counter()
     sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
     runtime = time.perf_counter() - start

@@ -237,6 +237,8 @@ def make_config(
     for name, value in (("number of instances", n_inst), ("number of nodes", n_nodes)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise InputError(f"{name} must be an integer >= 1, got {value!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
     for k in (min(k_tuple), max(k_tuple)):
         check_generator_args(k, n_nodes, DEFAULT_ZETA, 1000.0)
     tl = check_time_limit(time_limit)
@@ -391,11 +393,25 @@ class TaskLog:
                 records[rec["key"]] = rec
         return records
 
+    def open(self) -> None:
+        """Open the log for appending, creating its folder.
+
+        Raises
+        ------
+        InputError
+            ``"<path>: cannot write (<reason>)"`` when the folder or the file cannot be made.
+        """
+        if self._file is None:
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (closed in close())
+            except OSError as e:
+                raise InputError(f"{self.path}: cannot write ({e.strerror})") from None
+
     def append(self, record: Mapping[str, Any]) -> None:
         """Append one record durably."""
-        if self._file is None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (closed in close())
+        self.open()
+        assert self._file is not None
         self._file.write(json.dumps(record, allow_nan=True) + "\n")
         self._file.flush()
         os.fsync(self._file.fileno())
@@ -421,7 +437,7 @@ def run_solver_tasks(
     from gtsp_bench.registry import solver_specs
 
     spec = next(s for s in solver_specs() if s.name == solver)
-    target = spec.target if isinstance(spec.target, str) else None
+    target = spec.import_path()  # a solver registered by class is re-registered in the workers
     by_key = {t.key: t for t in tasks}
     return run_jobs(solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks],
                     jobs, hard_limit, lambda key, rec, persist: on_record(by_key[key], rec, persist))
@@ -567,6 +583,9 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
     """
     say = log or (lambda msg: print(msg, file=sys.stderr))
     t0 = time.perf_counter()
+    task_log = TaskLog(config.log_path)
+    task_log.open()  # an output folder that cannot be written fails here, before any work
+    task_log.close()
     summary = RunSummary()
     refs: dict[str, list[int]] = {}
     for k, r in config.references.items():
@@ -576,7 +595,6 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
             if r == "brute" else ""
         say(f"reference optimum: {r} for K = {ks_text(ks)}{note}")
     sets, tasks = plan(config)
-    task_log = TaskLog(config.log_path)
     records = task_log.load()
     done = {} if config.fresh else records
     todo = [t for t in tasks.values() if t.key not in done]

@@ -31,6 +31,18 @@ def tiny() -> Instance:
     )
 
 
+@pytest.fixture(autouse=True)
+def _restore_solver_registry():
+    """Solvers a test registers are gone after it, so that they do not join later tests' default
+    benchmark runs (the runner uses every registered solver)."""
+    from gtsp_bench import registry
+
+    saved = dict(registry._registry())
+    yield
+    registry._REGISTRY.clear()
+    registry._REGISTRY.update(saved)
+
+
 def gtsplib_files() -> list[Path]:
     """All sample .gtsp files (an empty list if the shared folder is missing)."""
     return sorted(GTSPLIB.glob("*.gtsp"))

@@ -33,6 +33,20 @@ class Slow:
         return Greedy().solve(instance, omega)
 
 
+class DieAboveHalf:
+    """Kills its own process (exit code 3) when omega > 0.5, as a crash in native code would;
+    greedy otherwise."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import os
+
+        from solvers.greedy import Greedy
+
+        if omega > 0.5:
+            os._exit(3)
+        return Greedy().solve(instance, omega)
+
+
 class FixedTour:
     """Clusters in index order, every head 0: feasible, usually not optimal."""
 

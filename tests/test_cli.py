@@ -89,17 +89,29 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     dup = tmp_path / "dup.gtsp"
     dup.write_text("NAME: d\nTYPE: GTSP\nDIMENSION: 2\nGTSP_SETS: 2\nEDGE_WEIGHT_TYPE: EUC_2D\n"
                    "NODE_COORD_SECTION\n1 0 0\n2 1 1\nGTSP_SET_SECTION\n1 1 2 -1\n2 2 -1\nEOF\n")
+    empty_set = tmp_path / "empty-set.gtsp"
+    empty_set.write_text(dup.read_text().replace("2 2 -1", "2 -1"))
+    dim = tmp_path / "dim.gtsp"
+    dim.write_text(dup.read_text().replace("DIMENSION: 2", "DIMENSION: 100000000000"))
     param = tmp_path / "param.json"
     param.write_text('{"depot": [0, 0], "clusters": [[[0, 1]]], "params": {"speed": 3}}')
     infeasible = tmp_path / "infeasible.json"
     infeasible.write_text('{"order": [0, 0, 1, 2], "heads": [0, 0, 0, 0]}')
+    huge = tmp_path / "huge.json"
+    huge.write_text('{"order": [0, 1, 2, 3%s], "heads": [0, 0, 0, 0]}' % ("0" * 30))
+    bigint = tmp_path / "bigint.json"
+    bigint.write_text('{"depot": [0, 0], "clusters": [[[0, 1%s]]]}' % ("0" * 400))
     missing = tmp_path / "missing.json"
+    folder = tmp_path / "folder.json"
+    folder.mkdir()
     return {
         "missing file": (["solve", str(missing), "-s", "greedy"], f"{missing}: no such file"),
         "malformed": (["solve", str(malformed), "-s", "greedy"], f"{malformed}: invalid JSON"),
         "nan": (["solve", str(nan), "-s", "greedy"], f"{nan}: invalid JSON: NaN is not a number"),
         "empty cluster": (["solve", str(empty), "-s", "greedy"], f"{empty}: clusters[1] is empty"),
+        "empty .gtsp set": (["solve", str(empty_set), "-s", "greedy"], f"{empty_set}: set 2 is empty"),
         "duplicate": (["solve", str(dup), "-s", "greedy"], f"{dup}: node 2 is in set 1 and in set 2"),
+        "huge dimension": (["solve", str(dim), "-s", "greedy"], f"{dim}: node 3 has no coordinates"),
         "omega": (["solve", str(k4), "-s", "greedy", "-w", "1.5"], "omega must be in [0, 1]"),
         "parameter": (["solve", str(param), "-s", "greedy"], "unknown energy parameter 'speed'"),
         "solver": (["solve", str(k4), "-s", "magic"], "unknown solver 'magic' (valid: "),
@@ -110,19 +122,31 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
         "impossible generator": (["generate", "-k", "80", "-o", str(tmp_path / "g.json")],
                                  "would cover"),
         "not a number": (["solve", str(k4), "-s", "greedy", "-w", "abc"], "not a number: 'abc'"),
+        "negative seed (solve)": (["solve", str(k4), "-s", "aco", "--seed", "-1"],
+                                  "a seed must be an integer >= 0, got -1"),
+        "negative seed (generate)": (["generate", "-k", "3", "--seed", "-2", "-o", str(missing)],
+                                     "a seed must be an integer >= 0, got -2"),
+        "negative seed (train)": (["train", "--seed", "-3", "-o", str(tmp_path / "p.pt")],
+                                  "a seed must be an integer >= 0, got -3"),
         "brute too big": (["solve", str(k4), "-s", "brute", "-p", "max_tours=2"],
                           "brute force would enumerate"),
-        "negative seed": (["solve", str(k4), "-s", "aco", "--seed", "-1"],
-                          "argument --seed: a seed must be an integer >= 0, got -1"),
-        "negative generate seed": (["generate", "-k", "3", "--seed", "-2", "-o", str(tmp_path / "s.json")],
-                                   "a seed must be an integer >= 0, got -2"),
+        "huge index": (["evaluate", str(k4), "--solution", str(huge)],
+                       f"{huge}: infeasible solution: order holds an integer far outside"),
+        "huge coordinate": (["solve", str(bigint), "-s", "greedy"],
+                            f"{bigint}: clusters[0][0] has a NaN or infinite coordinate"),
+        "output is a folder": (["solve", str(k4), "-s", "greedy", "-o", str(folder)],
+                               f"{folder}: cannot write"),
+        "generate onto a folder": (["generate", "-k", "3", "-o", str(folder)],
+                                   f"{folder}: cannot write"),
     }
 
 
 @pytest.mark.parametrize("case", [
     "missing file", "malformed", "nan", "empty cluster", "duplicate", "omega", "parameter",
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
-    "brute too big", "negative seed", "negative generate seed",
+    "brute too big", "output is a folder", "generate onto a folder", "huge index",
+    "huge coordinate", "huge dimension", "negative seed (solve)", "negative seed (generate)",
+    "negative seed (train)", "empty .gtsp set",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""

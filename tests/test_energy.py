@@ -83,6 +83,8 @@ def test_reversed_tour_has_the_same_energy(tiny):
         ([0, 1], [-1, 0], r"heads\[0\] = -1"),
         ([0, 1.0], [0, 0], "order must be a list of integers"),
         ([0, 1], [0, True], "heads must be a list of integers"),
+        ([0, 10**30], [0, 0], "order holds an integer far outside any index"),
+        ([0, 1], [0, -(10**30)], "heads holds an integer far outside any index"),
     ],
 )
 def test_infeasible_solutions_are_rejected(tiny, order, heads, message):

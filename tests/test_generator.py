@@ -50,12 +50,33 @@ def test_impossible_settings_fail_fast_with_a_clear_message():
     assert time.perf_counter() - start < 1.0
 
 
+def test_one_cluster_fits_whenever_the_area_exceeds_its_square():
+    """The coverage rule is about placing several squares; a single one is never refused."""
+    inst = generate_instance(1, 3, seed=0, zeta=50.0, area=120.0)
+    assert np.all((inst.coords >= 0) & (inst.coords <= 120.0))
+    with pytest.raises(InputError, match="would cover"):
+        generate_instance(2, 3, seed=0, zeta=50.0, area=120.0)
+
+
+def test_infinite_area_is_refused_as_such():
+    """An infinite area is refused for what it is, not as too small."""
+    with pytest.raises(InputError, match="area must be a finite length in m, got inf"):
+        generate_instance(3, 3, seed=0, area=float("inf"))
+
+
 @pytest.mark.parametrize("bad", [{"n_clusters": 0}, {"n_nodes": 0}, {"zeta": -1.0}])
 def test_bad_arguments(bad):
     """Non-positive K, N or zeta are rejected."""
     args = {"n_clusters": 3, "n_nodes": 5, "zeta": 50.0} | bad
     with pytest.raises(InputError):
         generate_instance(args["n_clusters"], args["n_nodes"], seed=0, zeta=args["zeta"])
+
+
+@pytest.mark.parametrize("seed", [-1, [3, -1], 1.5, "7"])
+def test_bad_seed_is_an_input_error(seed):
+    """numpy's own error (a ValueError or TypeError) becomes an InputError naming the seed."""
+    with pytest.raises(InputError, match="seed must be an integer >= 0"):
+        generate_instance(3, 4, seed=seed)
 
 
 def test_centres_are_two_zeta_apart_along_some_axis():

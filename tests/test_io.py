@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import stat
+
 import numpy as np
 import pytest
 
@@ -73,3 +76,27 @@ def test_atomic_write_leaves_no_temporary_files(tmp_path):
     atomic_write_text(target, "two")
     assert target.read_text() == "two"
     assert [p.name for p in target.parent.iterdir()] == ["out.txt"]
+
+
+def test_atomic_write_gives_ordinary_permissions(tmp_path):
+    """A new file is readable as after a plain write (0o666 less the umask), not owner-only;
+    an existing file keeps its mode."""
+    umask = os.umask(0o022)
+    try:
+        target = tmp_path / "new.csv"
+        atomic_write_text(target, "a")
+        assert stat.S_IMODE(target.stat().st_mode) == 0o644
+        target.chmod(0o600)
+        atomic_write_text(target, "b")
+        assert stat.S_IMODE(target.stat().st_mode) == 0o600 and target.read_text() == "b"
+    finally:
+        os.umask(umask)
+
+
+def test_atomic_write_onto_a_directory_is_an_input_error(tmp_path):
+    """Writing to a path that is a directory names the path; no temporary file is left."""
+    folder = tmp_path / "out.json"
+    folder.mkdir()
+    with pytest.raises(InputError, match=f"^{folder}: cannot write"):
+        atomic_write_text(folder, "x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]

@@ -55,6 +55,10 @@ def test_json_depot_may_be_null():
         ('{"clusters": [[[1, NaN]]]}', "NaN is not a number"),
         ('{"clusters": [[[1, Infinity]]]}', "Infinity is not a number"),
         ('{"clusters": [[[1, 1e999]]]}', "NaN or infinite"),
+        ('{"clusters": [[[1, 1%s]]]}' % ("0" * 400), "NaN or infinite"),  # int beyond float
+        ('{"clusters": [[[1, 1%s]]]}' % ("0" * 5000), "invalid JSON: Exceeds the limit"),
+        ("[" * 100_000 + "]" * 100_000, "invalid JSON: maximum recursion depth"),
+        (_text(params={"height": 10**400}), "'height' must be finite, got an integer too large"),
         (_text(depot=[1]), "depot must be a pair"),
         (_text(params={"hieght": 1}), "unknown energy parameter 'hieght'"),
         (_text(params={"height": -1}), "'height' must be > 0"),
@@ -76,6 +80,8 @@ def test_solution_parsing():
         parse_solution('{"order": [0]}')
     with pytest.raises(InputError, match="'order' must be a list of integers"):
         parse_solution('{"order": [0.5], "heads": [0]}')
+    with pytest.raises(InputError, match="invalid JSON: Exceeds the limit"):
+        parse_solution('{"order": [1%s], "heads": [0]}' % ("0" * 5000))
 
 
 @pytest.mark.parametrize("path", gtsplib_files(), ids=lambda p: p.stem)
@@ -127,6 +133,9 @@ def test_separator_variants_and_wrapped_sets():
         ("DIMENSION: 4", "DIMENSION: four", "DIMENSION must be an integer"),
         ("2 2 4 -1", "2 2 9 -1", "names node 9, outside 1..4"),
         ("GTSP_SETS: 2\n", "", "missing GTSP_SETS"),
+        ("2 2 4 -1", "2 2 4 -1\n3 -1", "set 3 is empty"),
+        # A DIMENSION far beyond the file is reported, not allocated (this once asked for 1.5 TiB).
+        ("DIMENSION: 4", "DIMENSION: 100000000000", "node 5 has no coordinates"),
     ],
 )
 def test_bad_gtsplib_text(old, new, message):
@@ -140,6 +149,12 @@ EXPLICIT = "\n".join([
     "EDGE_WEIGHT_FORMAT: FULL_MATRIX", "EDGE_WEIGHT_SECTION", "0 1 2", "1 0 3", "2 3 0",
     "GTSP_SET_SECTION", "1 3 -1", "2 1 2 -1", "EOF", "",
 ])
+
+
+def test_explicit_with_a_huge_dimension_is_refused_without_allocating():
+    """With no coordinates, the set section alone shows that DIMENSION lies."""
+    with pytest.raises(InputError, match="node 4 is in no set"):
+        parse_gtsp(EXPLICIT.replace("DIMENSION: 3", "DIMENSION: 100000000000"))
 
 
 def test_explicit_full_matrix_round_trip():

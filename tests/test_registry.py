@@ -83,11 +83,14 @@ def test_harness_rejects_what_the_evaluator_does_not_confirm(tiny, kwargs, messa
 
 
 def test_harness_checks_omega_and_time_limit(tiny):
-    """Bad omega or time limit are input errors raised before solving."""
+    """Bad omega, time limit or seed are input errors raised before solving."""
     with pytest.raises(InputError, match="omega"):
         run_solver(Fixed(), tiny, 2.0)
     with pytest.raises(InputError, match="time limit must be > 0"):
         run_solver(Fixed(), tiny, 0.5, time_limit=-1)
+    for seed in (-1, 1.5, True):
+        with pytest.raises(InputError, match="seed must be an integer >= 0"):
+            run_solver(Fixed(), tiny, 0.5, seed=seed)
 
 
 def test_result_json_shape(tiny):
@@ -104,3 +107,21 @@ def test_bench_flag():
 
     flags = {s.name: s.bench for s in solver_specs()}
     assert flags["brute"] is False and flags["greedy"] is True
+
+
+def test_import_path_for_worker_processes():
+    """A string target is its own path; a module-level class gets module:Class; a class that only
+    exists in this process (defined in a function, or in __main__) has none."""
+    from gtsp_bench.registry import SolverSpec
+
+    assert SolverSpec("g", "solvers.greedy:Greedy", "").import_path() == "solvers.greedy:Greedy"
+    assert SolverSpec("f", Fixed, "").import_path() == "tests.test_registry:Fixed"
+
+    class Local(Fixed):
+        pass
+
+    assert SolverSpec("l", Local, "").import_path() is None
+    Local.__module__, Local.__qualname__ = "__main__", "Local"
+    assert SolverSpec("m", Local, "").import_path() is None
+    Local.__module__ = "builtins"  # what exec() gives a class; builtins has no Local
+    assert SolverSpec("e", Local, "").import_path() is None
