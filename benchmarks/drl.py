@@ -86,12 +86,16 @@ def main(argv: list[str] | None = None) -> int:
     """Print the table; optionally write it as CSV."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--k", default="4,7,10", help="cluster counts (default: 4,7,10)")
+    parser.add_argument("--instances", type=int, default=100,
+                        help="instances per K, the first ones of each test set (default: 100)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per cell (median)")
     parser.add_argument("--only", help="comma-separated solver labels' prefixes to run (default: all)")
     parser.add_argument("--csv", help="also write the rows here")
     args = parser.parse_args(argv)
     ks = [int(k) for k in args.k.split(",")]
-    instances = {k: instance_set(100, k, TEST_SEED) for k in ks}
+    if args.instances < 1 or args.repeats < 1:
+        parser.error("--instances and --repeats must be >= 1")
+    instances = {k: instance_set(args.instances, k, TEST_SEED) for k in ks}
     opt = exact_optima(instances, ks)
     rows = []
     bound = {}
