@@ -151,9 +151,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--glimpse", choices=("all", "unvisited"), default=None,
                    help="drl: elements the decoder's glimpse attends to: every element, or only the "
                    "unvisited ones (default: unvisited, which generalises better to larger K)")
-    p.add_argument("--location", action=argparse.BooleanOptionalAction, default=None,
-                   help="drl: feed the UAV's location (the head it hovers above) to the decoder, "
-                   "as the paper's state includes it (default: off)")
     p.add_argument("--val-every", type=_int, default=250, metavar="S",
                    help="validate and checkpoint every S steps (default: 250)")
     p.add_argument("--val-size", type=_int, default=512, metavar="M",
@@ -264,16 +261,12 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _train_model_options(args: argparse.Namespace) -> dict[str, Any]:
+def _train_model_options(args: argparse.Namespace) -> dict[str, str]:
     if args.model != "drl":
-        for flag, value in (("--glimpse", args.glimpse), ("--location", args.location)):
-            if value is not None:
-                raise InputError(f"{flag} is an option of the drl model only")
+        if args.glimpse is not None:
+            raise InputError("--glimpse is an option of the drl model only")
         return {}
-    options: dict[str, Any] = {"glimpse": args.glimpse or "unvisited"}
-    if args.location:
-        options["location"] = True
-    return options
+    return {"glimpse": args.glimpse or "unvisited"}
 
 
 def _cmd_train(args: argparse.Namespace) -> int:

@@ -25,7 +25,7 @@ import torch
 from torch import nn
 
 from gtsp_bench.errors import InputError
-from solvers.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, choose, element_features, paper_head_step
+from solvers.rl_common import EnvBatch, LearnedSolver, choose, element_features
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
 GLIMPSES = ("all", "unvisited")
@@ -79,28 +79,17 @@ class PointerPolicy(nn.Module):
     glimpse
         ``all``: the glimpse attends to every element; ``unvisited``: visited ones are masked
         in the glimpse as in the pointer.
-    location
-        Add a linear embedding of the UAV's location (the head it hovers above, chosen by the
-        paper's rule as the order is decoded; the depot first) to the decoder's input: the
-        paper's state "the coordinates of all clusters, the location of the UAV" (section IV-C).
-        ``False``: the input is the last element's embedding alone.
     """
 
-    def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all",
-                 location: bool = False) -> None:
+    def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all") -> None:
         super().__init__()
         if glimpse not in GLIMPSES:
             raise InputError(f"drl glimpse must be one of {', '.join(GLIMPSES)}, got {glimpse!r}")
-        if not isinstance(location, bool):
-            raise InputError(f"drl location must be true or false, got {location!r}")
         self.config: dict[str, Any] = {"model": "drl", "n_nodes": n_nodes, "dim": dim}
         if glimpse != "all":
             self.config["glimpse"] = glimpse
-        if location:
-            self.config["location"] = True
         self.mask_glimpse = glimpse == "unvisited"
         self.embed = _Embedding(n_nodes, dim)
-        self.location = nn.Linear(2, dim, bias=False) if location else None
         self.lstm = nn.LSTMCell(dim, dim)
         self.w1 = nn.Linear(dim, dim, bias=False)
         self.w2 = nn.Linear(dim, dim)
@@ -139,8 +128,7 @@ class PointerPolicy(nn.Module):
         visited = torch.zeros((b, m), dtype=torch.bool)
         visited[:, 0] = True  # pi_0 = b0
         h = c = e.new_zeros((b, d))
-        where = env.depot  # the UAV's location, (B, 2) m
-        x = self._input(e[:, 0], where)
+        x = e[:, 0]
         k1, k3 = self.w1(e), self.w3(e)
         actions, logp = [], e.new_zeros(b)
         for _ in range(m - 1):
@@ -150,16 +138,8 @@ class PointerPolicy(nn.Module):
             act, step_logp, visited = choose(logits, visited, mode, generator)
             logp = logp + step_logp
             actions.append(act)
-            if self.location is not None:
-                where = paper_head_step(env, where, act - 1)[1]
-            x = self._input(e[rows, act], where)
+            x = e[rows, act]
         return torch.stack(actions, 1) - 1, logp
-
-    def _input(self, last: torch.Tensor, where: torch.Tensor) -> torch.Tensor:
-        """Decoder input: the last element's embedding (+ the UAV's location when enabled)."""
-        if self.location is None:
-            return last
-        return last + self.location((where / AREA_SCALE).float())
 
 
 class DRL(LearnedSolver):

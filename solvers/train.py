@@ -115,8 +115,6 @@ class TrainConfig:
                  f"--threads {self.threads}", f"--keep {self.keep}"]
         if "glimpse" in self.model_options:
             parts.append(f"--glimpse {self.model_options['glimpse']}")
-        if self.model_options.get("location"):
-            parts.append("--location")
         if self.omega is not None:
             parts.append(f"--omega {self.omega:g}")
         if self.max_time is not None:

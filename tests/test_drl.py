@@ -26,13 +26,12 @@ def tiny_ckpt(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize(("glimpse", "location"), [("all", False), ("unvisited", False),
-                                                   ("unvisited", True)])
+@pytest.mark.parametrize("glimpse", ["all", "unvisited"])
 @pytest.mark.parametrize("k", [1, 3, 6, 9])
-def test_decoded_orders_are_permutations(k, glimpse, location):
+def test_decoded_orders_are_permutations(k, glimpse):
     """Greedy and sampled orders visit every cluster exactly once; log-probabilities are finite."""
     torch.manual_seed(0)
-    model = PointerPolicy(n_nodes=4, dim=16, glimpse=glimpse, location=location)
+    model = PointerPolicy(n_nodes=4, dim=16, glimpse=glimpse)
     env = make_env(generate_batch(np.random.default_rng(k), 32, k, 4),
                    np.linspace(0, 1, 32))
     gen = torch.Generator().manual_seed(0)
@@ -87,44 +86,6 @@ def test_glimpse_option_is_saved_and_checked(tmp_path):
     assert not load_policy(path, "drl").mask_glimpse
     with pytest.raises(InputError, match="glimpse must be one of all, unvisited"):
         PointerPolicy(n_nodes=3, dim=8, glimpse="some")
-
-
-def test_location_input_is_the_paper_rule_heads_position():
-    """location=True adds W x (the head's position) to the decoder input: with W zero it decodes
-    as the model without it; with W set, the policy's probabilities change, and the positions it
-    is fed are the heads of the paper's rule along the decoded order (recorded through a hook)."""
-    from solvers.rl_common import AREA_SCALE, paper_heads
-
-    env = make_env(generate_batch(np.random.default_rng(7), 64, 6, 5), np.linspace(0, 1, 64))
-    torch.manual_seed(3)
-    plain = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited")
-    located = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", location=True)
-    located.load_state_dict({**plain.state_dict(), "location.weight": torch.zeros(16, 2)})
-    with torch.no_grad():
-        assert all(torch.equal(a, b) for a, b in zip(plain.decode(env), located.decode(env), strict=True))
-        located.location.weight.normal_(0, 5.0)
-        seen = []
-        located.location.register_forward_hook(lambda m, args, out: seen.append(args[0]))
-        order, logp = located.decode(env)
-        assert not torch.allclose(logp, plain.decode(env)[1])
-    heads = paper_heads(env, order)
-    rows = torch.arange(64)[:, None]
-    xy = env.coords[rows, order, heads[rows, order]]  # (B, K, 2) the heads in visiting order
-    expected = torch.cat([env.depot[:, None], xy[:, :-1]], 1) / AREA_SCALE  # fed before each step
-    assert torch.allclose(torch.stack(seen[:6], 1), expected.float())
-
-
-def test_location_option_is_saved_and_checked(tmp_path):
-    """The location setting round-trips through a policy file; a non-bool is a clear InputError."""
-    from solvers.rl_common import load_policy
-
-    path = tmp_path / "l.pt"
-    save_policy(PointerPolicy(n_nodes=3, dim=8, location=True), path)
-    assert load_policy(path, "drl").location is not None
-    save_policy(PointerPolicy(n_nodes=3, dim=8), path)
-    assert "location" not in load_policy(path, "drl").config
-    with pytest.raises(InputError, match="location must be true or false"):
-        PointerPolicy(n_nodes=3, dim=8, location="yes")
 
 
 def test_drl_solvers_feasible_and_sampling_not_worse(tiny_ckpt):

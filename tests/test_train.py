@@ -130,7 +130,6 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     (["--omega", "1.5"], "omega must be in [0, 1]"),
     (["--lr", "-1"], "learning rate must be a number"),
     (["--model", "am", "--glimpse", "all"], "--glimpse is an option of the drl model only"),
-    (["--model", "am", "--location"], "--location is an option of the drl model only"),
 ])
 def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     """Bad training settings: exit 2 with one line, and no file written."""
@@ -138,14 +137,3 @@ def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
-
-
-def test_cli_train_location_is_recorded(tmp_path, capsys):
-    """drl --location: the policy file's config, the JSON record and its command carry it."""
-    out = tmp_path / "loc.pt"
-    argv = ["train", "--clusters", "3", "--nodes", "4", "--steps", "2", "--batch", "8",
-            "--val-every", "2", "--val-size", "8", "--location", "--no-progress", "-o", str(out)]
-    assert main(argv) == 0, capsys.readouterr().err
-    meta = json.loads(output_paths(out)["meta"].read_text())
-    assert meta["config"]["location"] is True and "--location" in meta["command"]
-    assert load_policy(out, "drl").location is not None
