@@ -254,6 +254,13 @@ def check_time_limit(time_limit: float | None) -> float | None:
     return float(time_limit)
 
 
+def check_seed(seed: int) -> int:
+    """Return a valid seed (an integer >= 0, as numpy's generators take) or raise :class:`InputError`."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    return int(seed)
+
+
 def run_solver(
     solver: Solver | str,
     instance: Instance,
@@ -294,8 +301,7 @@ def run_solver(
     name = name or type(solver).__name__
     w = check_omega(omega) if instance.is_uav else None
     time_limit = check_time_limit(time_limit)
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
-        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    check_seed(seed)
     start = time.perf_counter()
     sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
     runtime = time.perf_counter() - start

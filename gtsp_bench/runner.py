@@ -213,7 +213,7 @@ def make_config(
     InputError
         A bad K, an unknown experiment, solver or reference, or a bad count or limit.
     """
-    from gtsp_bench.registry import check_time_limit, solver_names, solver_specs
+    from gtsp_bench.registry import check_seed, check_time_limit, solver_names, solver_specs
 
     registered = solver_names()
     if experiments in ("all", None):
@@ -237,8 +237,7 @@ def make_config(
     for name, value in (("number of instances", n_inst), ("number of nodes", n_nodes)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise InputError(f"{name} must be an integer >= 1, got {value!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    check_seed(seed)
     for k in (min(k_tuple), max(k_tuple)):
         check_generator_args(k, n_nodes, DEFAULT_ZETA, 1000.0)
     tl = check_time_limit(time_limit)
