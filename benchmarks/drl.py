@@ -40,6 +40,7 @@ SOLVERS = (
     ("greedy", "greedy", {}),
     ("drl", "drl", {}),
     ("drl heads=optimal", "drl", {"heads": "optimal"}),
+    ("drl reverse=true", "drl", {"reverse": True}),
     ("drl-sample (S=64)", "drl-sample", {}),
     ("drl-sample heads=optimal", "drl-sample", {"heads": "optimal"}),
     ("am", "am", {}),

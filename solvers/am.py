@@ -122,7 +122,8 @@ class AM(LearnedSolver):
 
     Default checkpoint: ``solvers/checkpoints/am.pt``. Options: ``checkpoint``, ``heads``
     (``optimal`` | ``paper``), ``samples`` (extra sampled tours per start, default 0),
-    ``augment`` (also decode the mirrored instance, default false), ``threads``.
+    ``augment`` (also decode the mirrored instance, default false), ``reverse`` (also price each
+    tour backwards; matters with the paper's heads only), ``threads``.
     """
 
     model_name = "am"

@@ -146,14 +146,16 @@ class DRL(LearnedSolver):
     """The paper's policy, greedy decoding; heads by the paper's rule (default) or optimal.
 
     Default checkpoint: ``solvers/checkpoints/drl.pt``. Options: ``checkpoint``, ``heads``
-    (``paper`` | ``optimal``), ``threads``.
+    (``paper`` | ``optimal``), ``threads``, ``reverse`` (also fly the decoded tour backwards and
+    keep the better direction under the head rule; default false, as the paper).
     """
 
     model_name = "drl"
     default_heads = "paper"
 
-    def __init__(self, checkpoint: str | None = None, heads: str | None = None, threads: int = 1) -> None:
-        super().__init__(checkpoint, heads, samples=0, threads=threads)
+    def __init__(self, checkpoint: str | None = None, heads: str | None = None, threads: int = 1,
+                 reverse: bool = False) -> None:
+        super().__init__(checkpoint, heads, samples=0, threads=threads, reverse=reverse)
 
 
 class DRLSample(LearnedSolver):
@@ -163,5 +165,5 @@ class DRLSample(LearnedSolver):
     default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 64,
-                 threads: int = 1) -> None:
-        super().__init__(checkpoint, heads, samples=samples, threads=threads)
+                 threads: int = 1, reverse: bool = False) -> None:
+        super().__init__(checkpoint, heads, samples=samples, threads=threads, reverse=reverse)

@@ -459,13 +459,17 @@ class LearnedSolver:
     augment
         Also decode the mirror image of each instance (x -> 2 x_depot - x; same costs) and keep
         the better tour.
+    reverse
+        Also price every decoded tour flown backwards and keep the better direction. Only the
+        paper's head rule can tell the two apart (it picks each head from the previous one);
+        with optimal heads both cost the same.
     """
 
     model_name = ""
     default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 0,
-                 threads: int = 1, augment: bool = False) -> None:
+                 threads: int = 1, augment: bool = False, reverse: bool = False) -> None:
         heads = heads or self.default_heads
         if heads not in HEAD_RULES:
             raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {heads!r}")
@@ -474,10 +478,12 @@ class LearnedSolver:
         self.checkpoint = Path(checkpoint) if checkpoint else CHECKPOINT_DIR / f"{self.model_name}.pt"
         self.heads = heads
         self.samples = samples
-        if not isinstance(augment, bool):
-            raise InputError(f"augment must be true or false, got {augment!r}")
+        for name, flag in (("augment", augment), ("reverse", reverse)):
+            if not isinstance(flag, bool):
+                raise InputError(f"{name} must be true or false, got {flag!r}")
         self.threads = threads
         self.augment = augment
+        self.reverse = reverse
         self._model: nn.Module | None = None
 
     @property
@@ -488,7 +494,8 @@ class LearnedSolver:
         return self._model
 
     def candidates(self, env: EnvBatch, generator: torch.Generator) -> torch.Tensor:
-        """``(B, R, K)`` candidate orders per instance (greedy first, then samples)."""
+        """``(B, R, K)`` candidate orders per instance (greedy first, then samples, then each of
+        them reversed if ``reverse``)."""
         b, _, _ = env.shape
         views = [env, mirror(env)] if self.augment else [env]
         orders = [self.model.decode(v, "greedy")[0].view(b, -1, env.shape[1]) for v in views]
@@ -496,7 +503,8 @@ class LearnedSolver:
             rep = env.repeat(self.samples)
             sampled, _ = self.model.decode(rep, "sample", generator=generator)
             orders.append(sampled.view(b, -1, env.shape[1]))
-        return torch.cat(orders, dim=1)
+        cand = torch.cat(orders, dim=1)
+        return torch.cat([cand, cand.flip(-1)], dim=1) if self.reverse else cand
 
     def solve_env(self, env: EnvBatch, seed: int = 0) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Best candidate per instance: ``order (B, K)``, ``heads (B, K)``, ``cost (B,)``."""
