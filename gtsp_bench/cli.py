@@ -56,10 +56,12 @@ def _int(text: str) -> int:
 
 
 def _seed(text: str) -> int:
-    value = _int(text)
-    if value < 0:  # numpy's generators take non-negative seeds only
-        raise argparse.ArgumentTypeError(f"a seed must be an integer >= 0, got {value}")
-    return value
+    from gtsp_bench.registry import check_seed
+
+    try:
+        return check_seed(_int(text))
+    except InputError as e:
+        raise argparse.ArgumentTypeError(f"a {e}") from None
 
 
 def _key_value(text: str) -> tuple[str, Any]:
