@@ -153,6 +153,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--glimpse", choices=("all", "unvisited"), default=None,
                    help="drl: elements the decoder's glimpse attends to: every element, or only the "
                    "unvisited ones (default: unvisited, which generalises better to larger K)")
+    p.add_argument("--local", action=argparse.BooleanOptionalAction, default=None,
+                   help="drl: add a learned term of the distances from the UAV's location and to "
+                   "the base station to the pointer's logits (default: off)")
+    p.add_argument("--energy", action=argparse.BooleanOptionalAction, default=None,
+                   help="drl with --local: also feed it the paper rule's energy of entering each "
+                   "cluster and where that head is (default: off)")
     p.add_argument("--val-every", type=_int, default=250, metavar="S",
                    help="validate and checkpoint every S steps (default: 250)")
     p.add_argument("--val-size", type=_int, default=512, metavar="M",
@@ -263,12 +269,21 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _train_model_options(args: argparse.Namespace) -> dict[str, str]:
+def _train_model_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.model != "drl":
-        if args.glimpse is not None:
-            raise InputError("--glimpse is an option of the drl model only")
+        for flag, value in (("--glimpse", args.glimpse), ("--local", args.local),
+                            ("--energy", args.energy)):
+            if value is not None:
+                raise InputError(f"{flag} is an option of the drl model only")
         return {}
-    return {"glimpse": args.glimpse or "unvisited"}
+    options: dict[str, Any] = {"glimpse": args.glimpse or "unvisited"}
+    if args.energy and not args.local:
+        raise InputError("--energy adds features to the --local term: give both")
+    if args.local:
+        options["local"] = True
+    if args.energy:
+        options["energy"] = True
+    return options
 
 
 def _cmd_train(args: argparse.Namespace) -> int:

@@ -25,7 +25,15 @@ import torch
 from torch import nn
 
 from gtsp_bench.errors import InputError
-from solvers.rl_common import EnvBatch, LearnedSolver, choose, element_features
+from solvers.rl_common import (
+    AREA_SCALE,
+    COST_SCALE,
+    EnvBatch,
+    LearnedSolver,
+    choose,
+    element_features,
+    paper_head_step,
+)
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
 GLIMPSES = ("all", "unvisited")
@@ -79,15 +87,53 @@ class PointerPolicy(nn.Module):
     glimpse
         ``all``: the glimpse attends to every element; ``unvisited``: visited ones are masked
         in the glimpse as in the pointer.
+    local
+        Add a learned term ``f(d(UAV, c_k), d(c_k, b0), omega)`` to each element's pointer logit:
+        ``d`` are distances from the UAV's location (the head it hovers above, chosen by the
+        paper's rule as the order is decoded; the depot first) and to the depot, ``c_k`` the
+        centroid of cluster k, ``f`` a 3 -> 32 -> 1 MLP. The paper's state includes the UAV's
+        location (section IV-C); this is where it enters the decision. ``False``: the paper's
+        pointer alone.
+    damp
+        With ``local``: weight the pointer's own logits by ``min(1, damp / n)``, ``n`` the
+        clusters left to visit, before the local term is added. The trainer sets it to the
+        training K, so no training step sees a weight below 1; at larger K the pointer, which
+        has only learned to choose among at most ``damp`` clusters, then shares the first
+        decisions with the K-free local term. 0: off.
+    energy
+        With ``local``: two more features per cluster for ``f``: the weighted energy of
+        entering it from the UAV's location (the value eq. "chselection" minimises, in kJ) and
+        the distance from the head that rule would pick there to the depot.
     """
 
-    def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all") -> None:
+    def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all",
+                 local: bool = False, damp: int = 0, energy: bool = False) -> None:
         super().__init__()
         if glimpse not in GLIMPSES:
             raise InputError(f"drl glimpse must be one of {', '.join(GLIMPSES)}, got {glimpse!r}")
+        if not isinstance(local, bool):
+            raise InputError(f"drl local must be true or false, got {local!r}")
         self.config: dict[str, Any] = {"model": "drl", "n_nodes": n_nodes, "dim": dim}
         if glimpse != "all":
             self.config["glimpse"] = glimpse
+        if isinstance(damp, bool) or not isinstance(damp, int) or damp < 0:
+            raise InputError(f"drl damp must be an integer >= 0, got {damp!r}")
+        if damp and not local:
+            raise InputError("drl damp needs the local term (local=True)")
+        if not isinstance(energy, bool):
+            raise InputError(f"drl energy must be true or false, got {energy!r}")
+        if energy and not local:
+            raise InputError("drl energy needs the local term (local=True)")
+        if local:
+            self.config["local"] = True
+        if damp:
+            self.config["damp"] = damp
+        if energy:
+            self.config["energy"] = True
+        self.damp = damp
+        self.energy = energy
+        width = 5 if energy else 3
+        self.local = nn.Sequential(nn.Linear(width, 32), nn.ReLU(), nn.Linear(32, 1)) if local else None
         self.mask_glimpse = glimpse == "unvisited"
         self.embed = _Embedding(n_nodes, dim)
         self.lstm = nn.LSTMCell(dim, dim)
@@ -130,16 +176,46 @@ class PointerPolicy(nn.Module):
         h = c = e.new_zeros((b, d))
         x = e[:, 0]
         k1, k3 = self.w1(e), self.w3(e)
+        if self.local is not None:  # centroids (depot first) and their distances to the depot
+            pts = torch.cat([env.depot[:, None], env.coords.mean(2)], dim=1) / AREA_SCALE
+            home = (pts - pts[:, :1]).pow(2).sum(-1).sqrt()
+            omega = env.omega[:, None].expand(b, m)
+            where = env.depot  # the UAV's location (m)
         actions, logp = [], e.new_zeros(b)
         for _ in range(m - 1):
             h, c = self.lstm(x, (h, c))
             g = self.glimpse(e, k1, h, visited)[0]
             logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
+            if self.damp:
+                left = (~visited).sum(1, keepdim=True)  # clusters left to visit, >= 1
+                logits = logits * (self.damp / left).clamp(max=1.0)
+            if self.local is not None:
+                near = (pts - where[:, None] / AREA_SCALE).pow(2).sum(-1).sqrt()
+                cols = [near, home, omega]
+                if self.energy:
+                    cols += self._rule_features(env, where)
+                feats = torch.stack(cols, dim=-1).float()  # (B, K + 1, 3 or 5)
+                logits = logits + self.local(feats).squeeze(-1)
             act, step_logp, visited = choose(logits, visited, mode, generator)
             logp = logp + step_logp
             actions.append(act)
             x = e[rows, act]
+            if self.local is not None:
+                where = paper_head_step(env, where, act - 1)[1]
         return torch.stack(actions, 1) - 1, logp
+
+
+    @staticmethod
+    def _rule_features(env: EnvBatch, where: torch.Tensor) -> list[torch.Tensor]:
+        """``(B, K + 1)`` each, the depot's column 0: the paper rule's energy of entering each
+        cluster from ``where`` (kJ), and the distance from the head it picks to the depot."""
+        b = env.shape[0]
+        score = env.edge_per_m[:, None, None] * (env.coords - where[:, None, None]).pow(2).sum(-1).sqrt()
+        enter, j = (score + env.node_cost).min(-1)  # (B, K)
+        xy = env.coords.gather(2, j[:, :, None, None].expand(-1, -1, 1, 2))[:, :, 0]  # (B, K, 2)
+        back = (xy - env.depot[:, None]).pow(2).sum(-1).sqrt() / AREA_SCALE
+        zero = enter.new_zeros((b, 1))
+        return [torch.cat([zero, enter / COST_SCALE], 1), torch.cat([zero, back], 1)]
 
 
 class DRL(LearnedSolver):

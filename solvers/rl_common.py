@@ -222,11 +222,32 @@ def tour_cost(env: EnvBatch, order: torch.Tensor, heads: torch.Tensor) -> torch.
     return nodes + env.edge_per_m * distance
 
 
-def paper_heads(env: EnvBatch, order: torch.Tensor) -> torch.Tensor:
-    """The paper's head rule (eq. "chselection"), ``(B, K)`` indexed by cluster.
+def paper_head_step(env: EnvBatch, prev: torch.Tensor, cluster: torch.Tensor,
+                    ) -> tuple[torch.Tensor, torch.Tensor]:
+    """One step of the paper's head rule (eq. "chselection") for every instance of the batch.
 
-    Entering cluster ``order[t]`` from the previous head (the depot first), the head is the node
-    with the least weighted energy from there: edge cost to it plus its node cost.
+    Entering ``cluster`` ``(B,)`` from the point ``prev`` ``(B, 2)`` (the previous head, or the
+    depot), the head is the node with the least weighted energy from there: edge cost to it plus
+    its node cost.
+
+    Returns
+    -------
+    head : torch.Tensor
+        ``(B,)`` the chosen node's index inside its cluster.
+    xy : torch.Tensor
+        ``(B, 2)`` its coordinates (m): where the UAV hovers next.
+    """
+    rows = torch.arange(len(cluster))
+    xy = env.coords[rows, cluster]  # (B, N, 2)
+    score = env.edge_per_m[:, None] * (xy - prev[:, None, :]).pow(2).sum(-1).sqrt()
+    j = (score + env.node_cost[rows, cluster]).argmin(1)
+    return j, xy[rows, j]
+
+
+def paper_heads(env: EnvBatch, order: torch.Tensor) -> torch.Tensor:
+    """The paper's head rule (eq. "chselection") along ``order``, ``(B, K)`` indexed by cluster.
+
+    :func:`paper_head_step` for each cluster in visiting order, from the depot.
     """
     b, k, _ = env.shape
     rows = torch.arange(b)
@@ -234,11 +255,7 @@ def paper_heads(env: EnvBatch, order: torch.Tensor) -> torch.Tensor:
     heads = torch.empty((b, k), dtype=torch.long)
     for t in range(k):
         c = order[:, t]
-        xy = env.coords[rows, c]  # (B, N, 2)
-        score = env.edge_per_m[:, None] * (xy - prev[:, None, :]).pow(2).sum(-1).sqrt()
-        j = (score + env.node_cost[rows, c]).argmin(1)
-        heads[rows, c] = j
-        prev = xy[rows, j]
+        heads[rows, c], prev = paper_head_step(env, prev, c)
     return heads
 
 

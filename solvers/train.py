@@ -115,6 +115,10 @@ class TrainConfig:
                  f"--threads {self.threads}", f"--keep {self.keep}"]
         if "glimpse" in self.model_options:
             parts.append(f"--glimpse {self.model_options['glimpse']}")
+        if self.model_options.get("local"):
+            parts.append("--local")
+        if self.model_options.get("energy"):
+            parts.append("--energy")
         if self.omega is not None:
             parts.append(f"--omega {self.omega:g}")
         if self.max_time is not None:
@@ -173,6 +177,8 @@ class Trainer:
         options = dict(cfg.model_options)
         if cfg.model == "drl":
             options.setdefault("n_nodes", cfg.nodes)
+            if options.get("local"):  # the pointer is damped only beyond the training K
+                options.setdefault("damp", cfg.clusters)
         self.model = build_model({"model": cfg.model, **options})
         if cfg.model == "drl":
             actor = [p for n, p in self.model.named_parameters() if not n.startswith("critic.")]

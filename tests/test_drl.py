@@ -26,12 +26,14 @@ def tiny_ckpt(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize("glimpse", ["all", "unvisited"])
+@pytest.mark.parametrize("options", [{"glimpse": "all"}, {"glimpse": "unvisited"},
+                                     {"glimpse": "unvisited", "local": True, "damp": 2},
+                                     {"glimpse": "unvisited", "local": True, "energy": True}])
 @pytest.mark.parametrize("k", [1, 3, 6, 9])
-def test_decoded_orders_are_permutations(k, glimpse):
+def test_decoded_orders_are_permutations(k, options):
     """Greedy and sampled orders visit every cluster exactly once; log-probabilities are finite."""
     torch.manual_seed(0)
-    model = PointerPolicy(n_nodes=4, dim=16, glimpse=glimpse)
+    model = PointerPolicy(n_nodes=4, dim=16, **options)
     env = make_env(generate_batch(np.random.default_rng(k), 32, k, 4),
                    np.linspace(0, 1, 32))
     gen = torch.Generator().manual_seed(0)
@@ -86,6 +88,116 @@ def test_glimpse_option_is_saved_and_checked(tmp_path):
     assert not load_policy(path, "drl").mask_glimpse
     with pytest.raises(InputError, match="glimpse must be one of all, unvisited"):
         PointerPolicy(n_nodes=3, dim=8, glimpse="some")
+
+
+def test_local_term_reads_the_uav_location_of_the_paper_rule():
+    """local=True adds f(d(UAV, centroid), d(centroid, depot), omega) to the logits: with f's
+    output layer zero it decodes as the model without it; otherwise the probabilities change, and
+    the distances it is fed are those from the heads the paper's rule picks along the decoded
+    order (the depot first), recorded through a hook."""
+    from solvers.rl_common import AREA_SCALE, paper_heads
+
+    b, k = 64, 6
+    env = make_env(generate_batch(np.random.default_rng(7), b, k, 5), np.linspace(0, 1, b))
+    torch.manual_seed(3)
+    plain = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited")
+    local = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", local=True)
+    extra = {f"local.{n}": v for n, v in local.local.state_dict().items()}
+    local.load_state_dict({**plain.state_dict(), **extra})
+    with torch.no_grad():
+        local.local[2].weight.zero_()
+        local.local[2].bias.zero_()
+        assert all(torch.allclose(a.float(), c.float())
+                   for a, c in zip(plain.decode(env), local.decode(env), strict=True))
+        local.local[2].weight.normal_(0, 5.0)
+        seen = []
+        local.local.register_forward_hook(lambda m, args, out: seen.append(args[0]))
+        order, logp = local.decode(env)
+        assert not torch.allclose(logp, plain.decode(env)[1])
+    feats = torch.stack(seen[:k], 1)  # (B, step, K + 1, 3)
+    heads = paper_heads(env, order)
+    rows = torch.arange(b)[:, None]
+    xy = env.coords[rows, order, heads[rows, order]]  # the heads in visiting order
+    where = torch.cat([env.depot[:, None], xy[:, :-1]], 1) / AREA_SCALE  # before each step
+    pts = torch.cat([env.depot[:, None], env.coords.mean(2)], 1) / AREA_SCALE
+    near = (pts[:, None] - where[:, :, None]).pow(2).sum(-1).sqrt()
+    home = (pts - pts[:, :1]).pow(2).sum(-1).sqrt()
+    assert torch.allclose(feats[..., 0], near.float(), atol=1e-6)
+    assert torch.allclose(feats[..., 1], home[:, None].expand(b, k, k + 1).float(), atol=1e-6)
+    assert torch.allclose(feats[..., 2], env.omega[:, None, None].expand(b, k, k + 1).float())
+
+
+def test_local_option_is_saved_and_checked(tmp_path):
+    """The local setting round-trips through a policy file; a non-bool is a clear InputError."""
+    from solvers.rl_common import load_policy
+
+    path = tmp_path / "l.pt"
+    save_policy(PointerPolicy(n_nodes=3, dim=8, local=True), path)
+    assert load_policy(path, "drl").local is not None
+    save_policy(PointerPolicy(n_nodes=3, dim=8), path)
+    assert "local" not in load_policy(path, "drl").config
+    with pytest.raises(InputError, match="local must be true or false"):
+        PointerPolicy(n_nodes=3, dim=8, local="yes")
+
+
+def test_damp_leaves_the_training_k_alone_and_weights_the_pointer_beyond_it():
+    """damp = D scales the pointer's logits by min(1, D / clusters left): up to D clusters the
+    policy is exactly the undamped one; with more, the first step's probabilities are those of
+    pointer * D / K + local term (checked against a hand computation); damp needs local."""
+    from solvers.rl_common import CLIP
+
+    torch.manual_seed(5)
+    plain = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", local=True)
+    damped = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", local=True, damp=4)
+    damped.load_state_dict(plain.state_dict())
+    small = make_env(generate_batch(np.random.default_rng(1), 32, 4, 5), np.linspace(0, 1, 32))
+    big = make_env(generate_batch(np.random.default_rng(2), 32, 8, 5), np.linspace(0, 1, 32))
+    with torch.no_grad():
+        assert all(torch.equal(a, b) for a, b in zip(plain.decode(small), damped.decode(small),
+                                                     strict=True))
+        runs = {}
+        for name, model in (("plain", plain), ("damped", damped)):
+            pointer: list[torch.Tensor] = []
+            local: list[torch.Tensor] = []
+            hooks = [model.v_g.register_forward_hook(
+                         lambda m, args, out, seen=pointer: seen.append(out.squeeze(-1))),
+                     model.local.register_forward_hook(
+                         lambda m, args, out, seen=local: seen.append(out.squeeze(-1)))]
+            order, _ = model.decode(big)
+            for hook in hooks:
+                hook.remove()
+            runs[name] = (pointer[0], local[0], order)
+    (p0, l0, plain_order), (p1, l1, damped_order) = runs["plain"], runs["damped"]
+    assert torch.equal(p0, p1) and torch.equal(l0, l1)  # the same inputs to the first choice
+    assert torch.equal(plain_order[:, 0], (CLIP * torch.tanh(p0 + l0))[:, 1:].argmax(1))
+    assert torch.equal(damped_order[:, 0], (CLIP * torch.tanh(p0 * 4 / 8 + l0))[:, 1:].argmax(1))
+    assert not torch.equal(plain_order, damped_order)
+    with pytest.raises(InputError, match="damp needs the local term"):
+        PointerPolicy(n_nodes=3, dim=8, damp=4)
+    with pytest.raises(InputError, match="damp must be an integer"):
+        PointerPolicy(n_nodes=3, dim=8, local=True, damp=-1)
+
+
+def test_energy_features_are_the_paper_rules_next_step():
+    """energy=True feeds, per cluster, the energy the paper's rule pays to enter it from the UAV's
+    location (kJ) and the distance from the head it picks to the depot: the same as one step of
+    paper_head_step, priced by hand; the depot's column is 0; energy needs local."""
+    from solvers.rl_common import AREA_SCALE, paper_head_step
+
+    b, k = 16, 5
+    env = make_env(generate_batch(np.random.default_rng(1), b, k, 6), np.linspace(0, 1, b))
+    where = env.coords[:, 2, 3]  # hovering above node 3 of cluster 2
+    enter, back = PointerPolicy._rule_features(env, where)
+    assert enter.shape == back.shape == (b, k + 1)
+    assert (enter[:, 0] == 0).all() and (back[:, 0] == 0).all()
+    rows = torch.arange(b)
+    for c in range(k):
+        j, xy = paper_head_step(env, where, torch.full((b,), c))
+        cost = env.edge_per_m * (xy - where).pow(2).sum(-1).sqrt() + env.node_cost[rows, c, j]
+        assert torch.allclose(enter[:, c + 1] * 1000, cost)
+        assert torch.allclose(back[:, c + 1], (xy - env.depot).pow(2).sum(-1).sqrt() / AREA_SCALE)
+    with pytest.raises(InputError, match="energy needs the local term"):
+        PointerPolicy(n_nodes=3, dim=8, energy=True)
 
 
 def test_drl_solvers_feasible_and_sampling_not_worse(tiny_ckpt):

@@ -130,6 +130,8 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     (["--omega", "1.5"], "omega must be in [0, 1]"),
     (["--lr", "-1"], "learning rate must be a number"),
     (["--model", "am", "--glimpse", "all"], "--glimpse is an option of the drl model only"),
+    (["--model", "am", "--local"], "--local is an option of the drl model only"),
+    (["--energy"], "--energy adds features to the --local term"),
 ])
 def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     """Bad training settings: exit 2 with one line, and no file written."""
@@ -137,3 +139,18 @@ def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_train_local_options_are_recorded(tmp_path, capsys):
+    """drl --local --energy: the policy file's config, the JSON record and its command carry
+    them, with damp set to the training K."""
+    out = tmp_path / "loc.pt"
+    argv = ["train", "--clusters", "3", "--nodes", "4", "--steps", "2", "--batch", "8",
+            "--val-every", "2", "--val-size", "8", "--local", "--energy", "--no-progress",
+            "-o", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    meta = json.loads(output_paths(out)["meta"].read_text())
+    assert meta["config"]["local"] is True and "--local" in meta["command"]
+    assert meta["config"]["damp"] == 3  # the training K
+    assert meta["config"]["energy"] is True and "--energy" in meta["command"]
+    assert load_policy(out, "drl").local is not None
