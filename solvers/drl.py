@@ -11,6 +11,10 @@ elements masked. The paper's u_k runs over every element; with ``glimpse="unvisi
 ``gtsp-bench train`` and the shipped checkpoint train it) visited elements are masked in the
 glimpse too, so g summarises what is left to visit, which the LSTM state alone must otherwise
 track: a policy trained on K = 4 then generalises much better to K = 10 (benchmarks/drl.py).
+Beyond the paper's equations, ``local`` adds to each pointer logit a learned term of K-free
+numbers read from the UAV's location (the paper's state includes it; ``energy`` adds the rule's
+next step into each cluster), and ``damp`` weights the pointer's own logits by
+min(1, K_train / clusters left) beyond the training K; the shipped checkpoint has all three.
 Heads: the paper's rule (eq. "chselection") by default, or optimal heads for the
 decoded order. The critic: an attention-weighted sum of its own embeddings -> dense + ReLU ->
 dense -> the expected cost (kJ).
