@@ -208,7 +208,6 @@ class PointerPolicy(nn.Module):
                 where = paper_head_step(env, where, act - 1)[1]
         return torch.stack(actions, 1) - 1, logp
 
-
     @staticmethod
     def _rule_features(env: EnvBatch, where: torch.Tensor) -> list[torch.Tensor]:
         """``(B, K + 1)`` each, the depot's column 0: the paper rule's energy of entering each
