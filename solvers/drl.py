@@ -37,6 +37,7 @@ from solvers.rl_common import (
     choose,
     element_features,
     paper_head_step,
+    rule_entry,
 )
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
@@ -213,8 +214,7 @@ class PointerPolicy(nn.Module):
         """``(B, K + 1)`` each, the depot's column 0: the paper rule's energy of entering each
         cluster from ``where`` (kJ), and the distance from the head it picks to the depot."""
         b = env.shape[0]
-        score = env.edge_per_m[:, None, None] * (env.coords - where[:, None, None]).pow(2).sum(-1).sqrt()
-        enter, j = (score + env.node_cost).min(-1)  # (B, K)
+        enter, j = rule_entry(env, where, env.coords, env.node_cost)  # (B, K)
         xy = env.coords.gather(2, j[:, :, None, None].expand(-1, -1, 1, 2))[:, :, 0]  # (B, K, 2)
         back = (xy - env.depot[:, None]).pow(2).sum(-1).sqrt() / AREA_SCALE
         zero = enter.new_zeros((b, 1))

@@ -239,9 +239,21 @@ def paper_head_step(env: EnvBatch, prev: torch.Tensor, cluster: torch.Tensor,
     """
     rows = torch.arange(len(cluster))
     xy = env.coords[rows, cluster]  # (B, N, 2)
-    score = env.edge_per_m[:, None] * (xy - prev[:, None, :]).pow(2).sum(-1).sqrt()
-    j = (score + env.node_cost[rows, cluster]).argmin(1)
+    j = rule_entry(env, prev, xy, env.node_cost[rows, cluster])[1]
     return j, xy[rows, j]
+
+
+def rule_entry(env: EnvBatch, prev: torch.Tensor, xy: torch.Tensor, node_cost: torch.Tensor,
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+    """The paper's rule entering candidate nodes ``xy`` ``(B, ..., N, 2)`` from ``prev`` ``(B, 2)``.
+
+    Returns the least weighted energy (edge cost from ``prev`` plus ``node_cost``, shaped like
+    ``xy`` without its last axis) and the node reaching it, both ``(B, ...)``: the rule's choice
+    for one cluster (``xy`` ``(B, N, 2)``) or for every cluster at once (``(B, K, N, 2)``).
+    """
+    lead = (prev.shape[0],) + (1,) * (xy.dim() - 2)
+    dist = (xy - prev.view(*lead, 2)).pow(2).sum(-1).sqrt()
+    return (env.edge_per_m.view(lead) * dist + node_cost).min(-1)
 
 
 def paper_heads(env: EnvBatch, order: torch.Tensor) -> torch.Tensor:
