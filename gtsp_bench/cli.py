@@ -151,14 +151,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--heads", choices=("paper", "optimal"), default=None,
                    help="head rule in the reward (default: paper for drl, optimal for am)")
     p.add_argument("--glimpse", choices=("all", "unvisited"), default=None,
-                   help="drl: elements the decoder's glimpse attends to: every element, or only the "
-                   "unvisited ones (default: unvisited, which generalises better to larger K)")
+                   help="drl: elements the decoder's glimpse attends to: every element (the "
+                   "paper's eq. u_k), or only the unvisited ones (default: unvisited, which "
+                   "generalises better to larger K)")
     p.add_argument("--local", action=argparse.BooleanOptionalAction, default=None,
                    help="drl: add a learned term of the distances from the UAV's location and to "
-                   "the base station to the pointer's logits (default: off)")
+                   "the base station to the pointer's logits (default: on; --no-local --no-energy "
+                   "--no-direction --glimpse all is the paper's plain pointer and training)")
     p.add_argument("--energy", action=argparse.BooleanOptionalAction, default=None,
                    help="drl with --local: also feed it the paper rule's energy of entering each "
-                   "cluster and where that head is (default: off)")
+                   "cluster and where that head is (default: on with --local)")
+    p.add_argument("--direction", action=argparse.BooleanOptionalAction, default=None,
+                   help="drl: also price each sampled tour flown backwards and move the odds of "
+                   "its first step toward the cheaper direction (default: on)")
     p.add_argument("--val-every", type=_int, default=250, metavar="S",
                    help="validate and checkpoint every S steps (default: 250)")
     p.add_argument("--val-size", type=_int, default=512, metavar="M",
@@ -270,19 +275,21 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _train_model_options(args: argparse.Namespace) -> dict[str, Any]:
+    """drl's model options; the defaults are the shipped model's recipe."""
     if args.model != "drl":
         for flag, value in (("--glimpse", args.glimpse), ("--local", args.local),
-                            ("--energy", args.energy)):
+                            ("--energy", args.energy), ("--direction", args.direction)):
             if value is not None:
                 raise InputError(f"{flag} is an option of the drl model only")
         return {}
     options: dict[str, Any] = {"glimpse": args.glimpse or "unvisited"}
-    if args.energy and not args.local:
-        raise InputError("--energy adds features to the --local term: give both")
-    if args.local:
+    local = args.local is not False
+    if args.energy and not local:
+        raise InputError("--energy adds features to the --local term: drop --no-local")
+    if local:
         options["local"] = True
-    if args.energy:
-        options["energy"] = True
+        if args.energy is not False:
+            options["energy"] = True
     return options
 
 
@@ -296,6 +303,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
                       omega=args.omega, heads=args.heads, val_every=args.val_every,
                       val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
                       threads=args.threads, max_time=args.max_time, keep=args.keep,
+                      direction=args.model == "drl" and args.direction is not False,
                       model_options=_train_model_options(args))
     meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "

@@ -220,6 +220,20 @@ def solver_names() -> list[str]:
     return [s.name for s in solver_specs()]
 
 
+def solver_revision(name: str) -> str:
+    """What the solver's optional ``revision()`` class method returns, else ``""``.
+
+    A solver whose default results depend on data besides its code (a learned policy's shipped
+    weights) returns a short tag of that data; the runner puts it in its task keys, so results
+    solved with other data are solved again rather than re-used.
+    """
+    registry = _registry()
+    if name not in registry:
+        raise InputError(f"unknown solver {name!r} (valid: {', '.join(solver_names())})")
+    revision = getattr(registry[name].load(), "revision", None)
+    return str(revision()) if callable(revision) else ""
+
+
 def get_solver(name: str, **options: Any) -> Solver:
     """Instantiate a registered solver with keyword options.
 

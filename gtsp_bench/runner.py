@@ -32,6 +32,7 @@ and PNG are written atomically and the generated blocks of ``<out>/README.md`` a
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import io
 import json
@@ -341,9 +342,23 @@ class Task:
     time_limit: float
 
 
+@functools.cache
+def _revision(solver: str) -> str:
+    from gtsp_bench.registry import solver_revision
+
+    try:
+        return solver_revision(solver)
+    except Exception:  # a solver that cannot be loaded fails in its worker, with the reason
+        return ""
+
+
 def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float) -> str:
-    """The log key: the instance's name and content hash, the solver and the solve settings."""
-    return f"{inst.instance.name}#{inst.fingerprint}|{solver}|w={omega:g}|seed={seed}|tl={time_limit:g}"
+    """The log key: the instance's name and content hash, the solver, its revision if it has one
+    (a learned policy's weights, see :func:`gtsp_bench.registry.solver_revision`) and the solve
+    settings. A changed revision gives new keys, so those solves are run again."""
+    revision = _revision(solver)
+    name = f"{solver}@{revision}" if revision else solver
+    return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={time_limit:g}"
 
 
 def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str, Task]]:

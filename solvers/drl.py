@@ -163,8 +163,9 @@ class PointerPolicy(nn.Module):
         return (a[..., None] * e).sum(1), a
 
     def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
-               ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Decode a visiting order per instance.
+               forced: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Decode a visiting order per instance, or score ``forced`` ``(B, T)``: 0-based orders,
+        or their first T <= K steps (then only those are decoded).
 
         Returns
         -------
@@ -187,7 +188,7 @@ class PointerPolicy(nn.Module):
             omega = env.omega[:, None].expand(b, m)
             where = env.depot  # the UAV's location (m)
         actions, logp = [], e.new_zeros(b)
-        for _ in range(m - 1):
+        for t in range(m - 1 if forced is None else forced.shape[1]):
             h, c = self.lstm(x, (h, c))
             g = self.glimpse(e, k1, h, visited)[0]
             logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
@@ -201,7 +202,8 @@ class PointerPolicy(nn.Module):
                     cols += self._rule_features(env, where)
                 feats = torch.stack(cols, dim=-1).float()  # (B, K + 1, 3 or 5)
                 logits = logits + self.local(feats).squeeze(-1)
-            act, step_logp, visited = choose(logits, visited, mode, generator)
+            act, step_logp, visited = choose(logits, visited, mode, generator,
+                                             None if forced is None else forced[:, t] + 1)
             logp = logp + step_logp
             actions.append(act)
             x = e[rows, act]

@@ -18,6 +18,7 @@ scale-free (d_0, flight energy per metre).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import itertools
 import math
 import time
@@ -378,11 +379,13 @@ def element_features(env: EnvBatch) -> tuple[torch.Tensor, torch.Tensor]:
 
 
 def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
-           generator: torch.Generator | None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+           generator: torch.Generator | None, forced: torch.Tensor | None = None,
+           ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """One decoding step from raw logits ``(R, M)``.
 
     The logits are clipped to C_L tanh(.), visited elements set to -inf, then the action is the
-    argmax (``mode="greedy"``) or a sample.
+    argmax (``mode="greedy"``), a sample, or ``forced`` ``(R,)`` when given (to score a known
+    order).
 
     Returns
     -------
@@ -395,7 +398,9 @@ def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
     """
     logits = (CLIP * torch.tanh(logits)).masked_fill(visited, -math.inf)
     logprob = torch.log_softmax(logits, -1)
-    if mode == "greedy":
+    if forced is not None:
+        action = forced
+    elif mode == "greedy":
         action = logits.argmax(-1)
     else:
         action = torch.multinomial(logprob.exp(), 1, generator=generator)[:, 0]
@@ -514,6 +519,14 @@ class LearnedSolver:
         self.augment = augment
         self.reverse = reverse
         self._model: nn.Module | None = None
+
+    @classmethod
+    def revision(cls) -> str:
+        """A hash of the default checkpoint's bytes (the runner re-solves when it changes)."""
+        path = CHECKPOINT_DIR / f"{cls.model_name}.pt"
+        if not path.is_file():
+            return "missing"
+        return hashlib.sha256(path.read_bytes()).hexdigest()[:12]
 
     @property
     def model(self) -> nn.Module:

@@ -1,6 +1,8 @@
 """Training loop of the learned policies (paper Algorithm 1, and POMO for ``am``).
 
-``drl``: REINFORCE with the critic baseline, one Adam per network (lr 1e-4), as the paper.
+``drl``: REINFORCE with the critic baseline, one Adam per network (lr 1e-4), as the paper;
+``direction`` (beyond the paper) adds a term that prices each sampled tour flown backwards too
+and moves the odds of its first step toward the cheaper direction.
 ``am``: REINFORCE with the POMO shared baseline (the mean cost of an instance's K tours).
 Data are drawn fresh each step from :func:`gtsp_bench.generator.generate_batch`, omega uniform in
 [0, 1] per instance unless fixed, and priced by the shared evaluator's quantities.
@@ -80,6 +82,7 @@ class TrainConfig:
     max_time: float | None = None
     grad_clip: float = 1.0
     keep: str = "best"
+    direction: bool = False
     model_options: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -99,6 +102,8 @@ class TrainConfig:
             raise InputError(f"max time must be > 0 seconds, got {self.max_time!r}")
         if self.keep not in ("best", "last"):
             raise InputError(f"keep must be 'best' or 'last', got {self.keep!r}")
+        if self.direction and self.model != "drl":
+            raise InputError("--direction is a training option of the drl model only")
         if self.val_every % self.log_every:
             raise InputError("val_every must be a multiple of log_every")
 
@@ -113,12 +118,13 @@ class TrainConfig:
                  f"--nodes {self.nodes}", f"--steps {self.steps}", f"--batch {self.batch}",
                  f"--lr {self.lr:g}", f"--seed {self.seed}", f"--heads {self.head_rule}",
                  f"--threads {self.threads}", f"--keep {self.keep}"]
-        if "glimpse" in self.model_options:
-            parts.append(f"--glimpse {self.model_options['glimpse']}")
-        if self.model_options.get("local"):
-            parts.append("--local")
-        if self.model_options.get("energy"):
-            parts.append("--energy")
+        if self.model == "drl":  # every switch spelled out: the CLI's defaults may change
+            opts = self.model_options
+            parts.append(f"--glimpse {opts.get('glimpse', 'all')}")
+            parts.append("--local" if opts.get("local") else "--no-local")
+            if opts.get("local"):
+                parts.append("--energy" if opts.get("energy") else "--no-energy")
+            parts.append("--direction" if self.direction else "--no-direction")
         if self.omega is not None:
             parts.append(f"--omega {self.omega:g}")
         if self.max_time is not None:
@@ -284,6 +290,8 @@ class Trainer:
         if self.cfg.model == "drl":
             value = self.model.critic(env)
             loss = ((c - value.detach()) * logp).mean()
+            if self.cfg.direction:
+                loss = loss + self._direction_loss(env, order, c)
             critic_loss = torch.nn.functional.mse_loss(value, c)
             total = loss + critic_loss
         else:
@@ -297,6 +305,28 @@ class Trainer:
         for opt in self.optims:
             opt.step()
         return float(loss.detach()), -float(cost.mean()), float(critic_loss.detach())
+
+    def _direction_loss(self, env: EnvBatch, order: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
+        """The direction term: prefer the cheaper of each sampled tour and the same tour flown
+        backwards, through the log-odds of their first steps.
+
+        A tour's first step is its choice of direction: both directions visit the same clusters
+        and, under the paper's head rule, differ in cost only through the heads the rule picks,
+        a signal the critic's baseline is too noisy to carry (the gap between greedy decoding
+        and ``reverse=true``). With ``lp`` the log-probabilities of the two first steps (taken
+        at the same state) and ``s = sign(c_rev - c)``, the term is
+        ``mean(|c - c_rev| * softplus(-s (lp - lp_rev)))``, a logistic loss weighted by what the
+        wrong direction costs: it pulls hardest where the policy prefers the costlier direction
+        and fades once it prefers the cheaper one.
+        """
+        rev = order.flip(-1)
+        lp = self.model.decode(env, forced=order[:, :1])[1]
+        lp_rev = self.model.decode(env, forced=rev[:, :1])[1]
+        with torch.no_grad():
+            c_rev = (tour_cost(env, rev, choose_heads(env, rev, self.cfg.head_rule))
+                     / COST_SCALE).float()
+        diff = c_rev - c  # > 0: the sampled direction is the cheaper one
+        return (diff.abs() * nn.functional.softplus(-diff.sign() * (lp - lp_rev))).mean()
 
     def validate(self) -> tuple[float, float | None]:
         """Mean greedy energy (J) on the validation set, and the mean gap (%) when known."""

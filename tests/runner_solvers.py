@@ -57,6 +57,16 @@ class FixedTour:
         return Solution(order, heads, evaluate(instance, omega, order, heads).objective)
 
 
+class Revised(FixedTour):
+    """FixedTour with a revision tag the tests change (as a learned policy's new weights would)."""
+
+    REV = "a"
+
+    @classmethod
+    def revision(cls) -> str:
+        return cls.REV
+
+
 class _GreedyAfterImport:
     """Greedy, after importing ``module`` (a library that may not share a process with another)."""
 
@@ -94,10 +104,10 @@ class UsesTorch(_GreedyAfterImport):
 
 
 def register() -> None:
-    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-highs, t-ortools, t-torch
-    and t-missing (whose class does not exist), all with ``bench=False``."""
+    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-revised, t-highs,
+    t-ortools, t-torch and t-missing (whose class does not exist), all with ``bench=False``."""
     for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
-                      ("t-fixed", "FixedTour"), ("t-highs", "UsesHighs"),
+                      ("t-fixed", "FixedTour"), ("t-revised", "Revised"), ("t-highs", "UsesHighs"),
                       ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),
                       ("t-missing", "NoSuchClass")):
         register_solver(name, f"tests.runner_solvers:{cls}", "runner test solver", bench=False,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -42,6 +43,31 @@ def test_decoded_orders_are_permutations(k, options):
         assert order.shape == (32, k)
         assert torch.equal(order.sort(1).values, torch.arange(k).expand(32, k))
         assert torch.isfinite(logp).all() and (logp <= 1e-6).all()
+
+
+@pytest.mark.parametrize("options", [{}, {"glimpse": "unvisited", "local": True, "energy": True}])
+def test_forced_decoding_scores_the_given_order(options):
+    """decode(forced=order) returns that order and the log-probability sampling gave it; over
+    all orders of K = 3 the probabilities sum to 1, and so do those of the 3 one-step prefixes,
+    each the sum of its tours'."""
+    torch.manual_seed(0)
+    model = PointerPolicy(n_nodes=4, dim=16, **options)
+    env = make_env(generate_batch(np.random.default_rng(5), 16, 3, 4), np.linspace(0, 1, 16))
+    with torch.no_grad():
+        order, logp = model.decode(env, "sample", generator=torch.Generator().manual_seed(1))
+        again, logp_again = model.decode(env, forced=order)
+        assert torch.equal(again, order)
+        torch.testing.assert_close(logp_again, logp)
+        perms = list(itertools.permutations(range(3)))
+        prob = {p: model.decode(env, forced=torch.tensor([p] * 16))[1].exp() for p in perms}
+        first = {}
+        for j in range(3):
+            head, lp = model.decode(env, forced=torch.full((16, 1), j))
+            assert head.shape == (16, 1)
+            first[j] = lp.exp()
+            torch.testing.assert_close(first[j], sum(v for p, v in prob.items() if p[0] == j))
+    torch.testing.assert_close(sum(prob.values()), torch.ones(16))
+    torch.testing.assert_close(sum(first.values()), torch.ones(16))
 
 
 def test_masking_gives_visited_clusters_zero_probability():

@@ -125,3 +125,17 @@ def test_import_path_for_worker_processes():
     assert SolverSpec("m", Local, "").import_path() is None
     Local.__module__ = "builtins"  # what exec() gives a class; builtins has no Local
     assert SolverSpec("e", Local, "").import_path() is None
+
+
+def test_solver_revision_is_the_learned_checkpoints_hash():
+    """drl's revision is a hash of its shipped weights; a solver without one has ""."""
+    import hashlib
+
+    from gtsp_bench.registry import solver_revision
+    from solvers.rl_common import CHECKPOINT_DIR
+
+    digest = hashlib.sha256((CHECKPOINT_DIR / "drl.pt").read_bytes()).hexdigest()[:12]
+    assert solver_revision("drl") == solver_revision("drl-sample") == digest
+    assert solver_revision("am") != digest and solver_revision("greedy") == ""
+    with pytest.raises(InputError, match="unknown solver"):
+        solver_revision("nope")

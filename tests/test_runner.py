@@ -171,6 +171,25 @@ def test_interrupt_then_resume_redoes_nothing(tmp_path, monkeypatch):
     assert _log_lines(config) == lines
 
 
+def test_new_solver_revision_is_solved_again(tmp_path, monkeypatch):
+    """A solver whose revision changes (a learned policy's new weights) is solved again on the
+    next run; solvers without a revision stay re-used, and so does the old revision's log."""
+    config = _config(tmp_path, experiments="ratio-k", ks="3", solvers="greedy,t-revised",
+                     n_instances=2)
+    first = run_bench(config, log=lambda m: None)
+    assert first.run == first.tasks
+    assert run_bench(config, log=lambda m: None).run == 0
+    monkeypatch.setattr(runner_solvers.Revised, "REV", "b")
+    runner._revision.cache_clear()
+    try:
+        again = run_bench(config, log=lambda m: None)
+    finally:
+        runner._revision.cache_clear()
+    revised = [json.loads(line) for line in _log_lines(config) if "|t-revised@b|" in line]
+    assert again.run == len(revised) > 0 and again.cached == again.tasks - again.run
+    assert sum("|t-revised@a|" in line for line in _log_lines(config)) == len(revised)
+
+
 def test_killed_run_resumes(tmp_path):
     """SIGKILL of a running `gtsp-bench bench` midway, plus a torn last line: the rerun keeps every
     finished solve, drops the torn line, and runs exactly the missing ones."""

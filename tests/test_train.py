@@ -55,6 +55,52 @@ def test_tiny_model_trains_and_writes_its_files(tmp_path, model):
     assert load_policy(paths["policy"], model).config == trainer.model.config
 
 
+def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
+    """The direction term is mean(|c - c_rev| softplus(-sign(c_rev - c) (lp - lp_rev))), lp the
+    log-probability of a tour's first step; a gradient step on it alone raises the log-odds of
+    the cheaper direction (weighted by the cost gap), and pairs that cost the same give it no
+    gradient."""
+    from solvers.rl_common import COST_SCALE, choose_heads, tour_cost
+
+    trainer = Trainer(_cfg(direction=True), tmp_path / "p.pt")
+    env = trainer.batch_env()
+    order, _ = trainer.model.decode(env, "sample", generator=torch.Generator().manual_seed(0))
+    rev = order.flip(-1)
+    with torch.no_grad():
+        c = (tour_cost(env, order, choose_heads(env, order, "paper")) / COST_SCALE).float()
+        c_rev = (tour_cost(env, rev, choose_heads(env, rev, "paper")) / COST_SCALE).float()
+    assert (c != c_rev).any()  # the paper's rule makes the two directions cost differently
+
+    def log_odds() -> torch.Tensor:
+        return (trainer.model.decode(env, forced=order[:, :1])[1]
+                - trainer.model.decode(env, forced=rev[:, :1])[1])
+
+    loss = trainer._direction_loss(env, order, c)
+    expect = ((c - c_rev).abs() * torch.nn.functional.softplus(-(c_rev - c).sign() * log_odds()))
+    torch.testing.assert_close(loss, expect.mean())
+    with torch.no_grad():
+        before = ((c_rev - c) * log_odds()).mean()
+    trainer.model.zero_grad()
+    loss.backward()
+    with torch.no_grad():
+        for p in trainer.model.parameters():
+            if p.grad is not None:
+                p -= 10.0 * p.grad
+        assert ((c_rev - c) * log_odds()).mean() > before
+    trainer.model.zero_grad()
+    c_same = (tour_cost(env, rev, choose_heads(env, rev, "paper")) / COST_SCALE).float()
+    trainer._direction_loss(env, order, c_same).backward()  # equal costs: no signal
+    assert all(p.grad is None or not p.grad.any() for p in trainer.model.parameters())
+
+
+def test_direction_recorded_and_drl_only(tmp_path):
+    """--direction is in the JSON's command; the am model refuses it."""
+    meta = train(_cfg(steps=2, direction=True), tmp_path / "r.pt", progress=False)
+    assert "--direction" in meta["command"] and meta["train"]["direction"] is True
+    with pytest.raises(InputError, match="drl model only"):
+        _cfg("am", direction=True)
+
+
 def test_resume_after_interruption_continues_from_saved_step(tmp_path, monkeypatch):
     """Interrupted at step 5 (state saved at 4), a resumed run ends where an uninterrupted one does."""
     ref = Trainer(_cfg(steps=8), tmp_path / "ref.pt")
@@ -131,7 +177,8 @@ def test_cli_train_killed_then_resumed(tmp_path, capsys):
     (["--lr", "-1"], "learning rate must be a number"),
     (["--model", "am", "--glimpse", "all"], "--glimpse is an option of the drl model only"),
     (["--model", "am", "--local"], "--local is an option of the drl model only"),
-    (["--energy"], "--energy adds features to the --local term"),
+    (["--energy", "--no-local"], "--energy adds features to the --local term"),
+    (["--model", "am", "--direction"], "--direction is an option of the drl model only"),
 ])
 def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     """Bad training settings: exit 2 with one line, and no file written."""
@@ -141,16 +188,24 @@ def test_cli_train_bad_settings_exit_2(tmp_path, capsys, args, message):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_cli_train_local_options_are_recorded(tmp_path, capsys):
-    """drl --local --energy: the policy file's config, the JSON record and its command carry
-    them, with damp set to the training K."""
+def test_cli_train_defaults_are_the_shipped_recipe_and_recorded(tmp_path, capsys):
+    """drl's defaults (--local --energy --direction, damp = the training K) and their --no-
+    forms: the policy file's config, the JSON record and its command carry them, spelled out."""
+    base = ["train", "--clusters", "3", "--nodes", "4", "--steps", "2", "--batch", "8",
+            "--val-every", "2", "--val-size", "8", "--no-progress"]
     out = tmp_path / "loc.pt"
-    argv = ["train", "--clusters", "3", "--nodes", "4", "--steps", "2", "--batch", "8",
-            "--val-every", "2", "--val-size", "8", "--local", "--energy", "--no-progress",
-            "-o", str(out)]
-    assert main(argv) == 0, capsys.readouterr().err
+    assert main([*base, "-o", str(out)]) == 0, capsys.readouterr().err
     meta = json.loads(output_paths(out)["meta"].read_text())
-    assert meta["config"]["local"] is True and "--local" in meta["command"]
+    assert meta["config"]["local"] is True and meta["config"]["energy"] is True
     assert meta["config"]["damp"] == 3  # the training K
-    assert meta["config"]["energy"] is True and "--energy" in meta["command"]
+    assert meta["train"]["direction"] is True
+    assert "--glimpse unvisited --local --energy --direction" in meta["command"]
     assert load_policy(out, "drl").local is not None
+    plain = tmp_path / "plain.pt"
+    argv = [*base, "--glimpse", "all", "--no-local", "--no-direction", "-o", str(plain)]
+    assert main(argv) == 0, capsys.readouterr().err
+    meta = json.loads(output_paths(plain)["meta"].read_text())
+    assert "local" not in meta["config"] and "glimpse" not in meta["config"]
+    assert meta["train"]["direction"] is False
+    assert "--glimpse all --no-local --no-direction" in meta["command"]
+    assert load_policy(plain, "drl").local is None
