@@ -274,14 +274,15 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _train_model_options(args: argparse.Namespace) -> dict[str, Any]:
-    """drl's model options; the defaults are the shipped model's recipe."""
+def _train_recipe(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
+    """drl's model options and whether to train with the direction term; the defaults are the
+    shipped model's recipe (am: no options)."""
     if args.model != "drl":
         for flag, value in (("--glimpse", args.glimpse), ("--local", args.local),
                             ("--energy", args.energy), ("--direction", args.direction)):
             if value is not None:
                 raise InputError(f"{flag} is an option of the drl model only")
-        return {}
+        return {}, False
     options: dict[str, Any] = {"glimpse": args.glimpse or "unvisited"}
     local = args.local is not False
     if args.energy and not local:
@@ -290,7 +291,7 @@ def _train_model_options(args: argparse.Namespace) -> dict[str, Any]:
         options["local"] = True
         if args.energy is not False:
             options["energy"] = True
-    return options
+    return options, args.direction is not False
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
@@ -298,13 +299,13 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
     from solvers.train import TrainConfig, train
 
+    options, direction = _train_recipe(args)
     cfg = TrainConfig(model=args.model, clusters=args.clusters, nodes=args.nodes,
                       steps=args.steps, batch=args.batch, lr=args.lr, seed=args.seed,
                       omega=args.omega, heads=args.heads, val_every=args.val_every,
                       val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
                       threads=args.threads, max_time=args.max_time, keep=args.keep,
-                      direction=args.model == "drl" and args.direction is not False,
-                      model_options=_train_model_options(args))
+                      direction=direction, model_options=options)
     meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
           f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)

@@ -38,6 +38,7 @@ from solvers.rl_common import (
     element_features,
     paper_head_step,
     rule_entry,
+    step_logprobs,
 )
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
@@ -174,34 +175,18 @@ class PointerPolicy(nn.Module):
         logp : torch.Tensor
             ``(B,)`` log-probability of the order under the policy.
         """
-        e = self.embed(env)
+        e, k1, k3, ctx = self._start(env)
         b, m, d = e.shape
         rows = torch.arange(b)
         visited = torch.zeros((b, m), dtype=torch.bool)
         visited[:, 0] = True  # pi_0 = b0
         h = c = e.new_zeros((b, d))
         x = e[:, 0]
-        k1, k3 = self.w1(e), self.w3(e)
-        if self.local is not None:  # centroids (depot first) and their distances to the depot
-            pts = torch.cat([env.depot[:, None], env.coords.mean(2)], dim=1) / AREA_SCALE
-            home = (pts - pts[:, :1]).pow(2).sum(-1).sqrt()
-            omega = env.omega[:, None].expand(b, m)
-            where = env.depot  # the UAV's location (m)
+        where = env.depot  # the UAV's location (m)
         actions, logp = [], e.new_zeros(b)
         for t in range(m - 1 if forced is None else forced.shape[1]):
             h, c = self.lstm(x, (h, c))
-            g = self.glimpse(e, k1, h, visited)[0]
-            logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
-            if self.damp:
-                left = (~visited).sum(1, keepdim=True)  # clusters left to visit, >= 1
-                logits = logits * (self.damp / left).clamp(max=1.0)
-            if self.local is not None:
-                near = (pts - where[:, None] / AREA_SCALE).pow(2).sum(-1).sqrt()
-                cols = [near, home, omega]
-                if self.energy:
-                    cols += self._rule_features(env, where)
-                feats = torch.stack(cols, dim=-1).float()  # (B, K + 1, 3 or 5)
-                logits = logits + self.local(feats).squeeze(-1)
+            logits = self._logits(env, e, k1, k3, h, visited, where, ctx)
             act, step_logp, visited = choose(logits, visited, mode, generator,
                                              None if forced is None else forced[:, t] + 1)
             logp = logp + step_logp
@@ -210,6 +195,47 @@ class PointerPolicy(nn.Module):
             if self.local is not None:
                 where = paper_head_step(env, where, act - 1)[1]
         return torch.stack(actions, 1) - 1, logp
+
+    def first_logprobs(self, env: EnvBatch) -> torch.Tensor:
+        """Log-probabilities ``(B, K)`` of the first step's choice of each cluster (from the
+        depot): one pass gives the first step of every order, e.g. a tour and its reverse."""
+        e, k1, k3, ctx = self._start(env)
+        b, m, d = e.shape
+        visited = torch.zeros((b, m), dtype=torch.bool)
+        visited[:, 0] = True
+        h = self.lstm(e[:, 0], (e.new_zeros((b, d)), e.new_zeros((b, d))))[0]
+        logits = self._logits(env, e, k1, k3, h, visited, env.depot, ctx)
+        return step_logprobs(logits, visited)[:, 1:]
+
+    def _start(self, env: EnvBatch) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor,
+                                             tuple[torch.Tensor, ...]]:
+        """Embeddings ``e``, ``W1 e``, ``W3 e`` and the local term's fixed inputs."""
+        e = self.embed(env)
+        ctx: tuple[torch.Tensor, ...] = ()
+        if self.local is not None:  # centroids (depot first), their distances to the depot, omega
+            pts = torch.cat([env.depot[:, None], env.coords.mean(2)], dim=1) / AREA_SCALE
+            home = (pts - pts[:, :1]).pow(2).sum(-1).sqrt()
+            ctx = (pts, home, env.omega[:, None].expand(e.shape[0], e.shape[1]))
+        return e, self.w1(e), self.w3(e), ctx
+
+    def _logits(self, env: EnvBatch, e: torch.Tensor, k1: torch.Tensor, k3: torch.Tensor,
+                h: torch.Tensor, visited: torch.Tensor, where: torch.Tensor,
+                ctx: tuple[torch.Tensor, ...]) -> torch.Tensor:
+        """Raw pointer logits ``(B, K + 1)`` at decoder state ``h``, the UAV at ``where`` (m)."""
+        g = self.glimpse(e, k1, h, visited)[0]
+        logits = self.v_g(torch.tanh(k3 + self.w4(g)[:, None])).squeeze(-1)
+        if self.damp:
+            left = (~visited).sum(1, keepdim=True)  # clusters left to visit, >= 1
+            logits = logits * (self.damp / left).clamp(max=1.0)
+        if self.local is not None:
+            pts, home, omega = ctx
+            near = (pts - where[:, None] / AREA_SCALE).pow(2).sum(-1).sqrt()
+            cols = [near, home, omega]
+            if self.energy:
+                cols += self._rule_features(env, where)
+            feats = torch.stack(cols, dim=-1).float()  # (B, K + 1, 3 or 5)
+            logits = logits + self.local(feats).squeeze(-1)
+        return logits
 
     @staticmethod
     def _rule_features(env: EnvBatch, where: torch.Tensor) -> list[torch.Tensor]:

@@ -378,6 +378,16 @@ def element_features(env: EnvBatch) -> tuple[torch.Tensor, torch.Tensor]:
     return nodes, depot
 
 
+def _clipped(logits: torch.Tensor, visited: torch.Tensor) -> torch.Tensor:
+    return (CLIP * torch.tanh(logits)).masked_fill(visited, -math.inf)
+
+
+def step_logprobs(logits: torch.Tensor, visited: torch.Tensor) -> torch.Tensor:
+    """Log-probabilities ``(R, M)`` of one step: raw logits clipped to C_L tanh(.), visited
+    elements masked (-inf)."""
+    return torch.log_softmax(_clipped(logits, visited), -1)
+
+
 def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
            generator: torch.Generator | None, forced: torch.Tensor | None = None,
            ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -396,7 +406,7 @@ def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
     visited : torch.Tensor
         The new visited mask (a copy; autograd needs the old one).
     """
-    logits = (CLIP * torch.tanh(logits)).masked_fill(visited, -math.inf)
+    logits = _clipped(logits, visited)
     logprob = torch.log_softmax(logits, -1)
     if forced is not None:
         action = forced

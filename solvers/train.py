@@ -320,8 +320,8 @@ class Trainer:
         and fades once it prefers the cheaper one.
         """
         rev = order.flip(-1)
-        lp = self.model.decode(env, forced=order[:, :1])[1]
-        lp_rev = self.model.decode(env, forced=rev[:, :1])[1]
+        first = self.model.first_logprobs(env)  # (B, K): both first steps in one pass
+        lp, lp_rev = first.gather(1, torch.stack([order[:, 0], rev[:, 0]], 1)).unbind(1)
         with torch.no_grad():
             c_rev = (tour_cost(env, rev, choose_heads(env, rev, self.cfg.head_rule))
                      / COST_SCALE).float()
