@@ -102,8 +102,8 @@ def test_proves_gtsplib_optima(name, best):
 
 @pytest.mark.parametrize("time_limit", [0.01, 1.0])
 def test_time_limit_gives_tour_and_bound(time_limit):
-    """A K = 40 instance stopped early (0.01 s: before its first LP; 1 s: in the root loop):
-    the best tour, a lower bound below it, status time_limit. (It is not solved in 60 s here;
+    """A K = 40 instance stopped early (after 0.01 s and after 1 s, both before the first root
+    round ends): the best tour, a lower bound below it, status time_limit. (It is not solved in 60 s here;
     a K = 20 one was solved in about 1 s, so the 1 s case depended on the machine's speed.)"""
     inst = generate_instance(40, 20, seed=1)
     r = run_solver("milp", inst, 0.5, time_limit=time_limit)
