@@ -175,6 +175,15 @@ class PointerPolicy(nn.Module):
         logp : torch.Tensor
             ``(B,)`` log-probability of the order under the policy.
         """
+        order, logp, _ = self.decode_first(env, mode, generator=generator, forced=forced)
+        return order, logp
+
+    def decode_first(self, env: EnvBatch, mode: str = "greedy", *,
+                     generator: torch.Generator | None = None, forced: torch.Tensor | None = None,
+                     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """:meth:`decode`, and the log-probabilities ``(B, K)`` of the first step's choice of
+        each cluster (from the depot): the first step of every order at once, e.g. of a tour
+        and of its reverse, at no extra cost."""
         e, k1, k3, ctx = self._start(env)
         b, m, d = e.shape
         rows = torch.arange(b)
@@ -183,10 +192,12 @@ class PointerPolicy(nn.Module):
         h = c = e.new_zeros((b, d))
         x = e[:, 0]
         where = env.depot  # the UAV's location (m)
-        actions, logp = [], e.new_zeros(b)
+        actions, logp, first = [], e.new_zeros(b), e.new_zeros((b, 0))
         for t in range(m - 1 if forced is None else forced.shape[1]):
             h, c = self.lstm(x, (h, c))
             logits = self._logits(env, e, k1, k3, h, visited, where, ctx)
+            if t == 0:
+                first = step_logprobs(logits, visited)[:, 1:]
             act, step_logp, visited = choose(logits, visited, mode, generator,
                                              None if forced is None else forced[:, t] + 1)
             logp = logp + step_logp
@@ -194,18 +205,7 @@ class PointerPolicy(nn.Module):
             x = e[rows, act]
             if self.local is not None:
                 where = paper_head_step(env, where, act - 1)[1]
-        return torch.stack(actions, 1) - 1, logp
-
-    def first_logprobs(self, env: EnvBatch) -> torch.Tensor:
-        """Log-probabilities ``(B, K)`` of the first step's choice of each cluster (from the
-        depot): one pass gives the first step of every order, e.g. a tour and its reverse."""
-        e, k1, k3, ctx = self._start(env)
-        b, m, d = e.shape
-        visited = torch.zeros((b, m), dtype=torch.bool)
-        visited[:, 0] = True
-        h = self.lstm(e[:, 0], (e.new_zeros((b, d)), e.new_zeros((b, d))))[0]
-        logits = self._logits(env, e, k1, k3, h, visited, env.depot, ctx)
-        return step_logprobs(logits, visited)[:, 1:]
+        return torch.stack(actions, 1) - 1, logp, first
 
     def _start(self, env: EnvBatch) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor,
                                              tuple[torch.Tensor, ...]]:

@@ -281,7 +281,10 @@ class Trainer:
         """One gradient step; returns (actor loss, mean reward in J, critic loss or NaN)."""
         env = self.batch_env()
         self.model.train()
-        order, logp = self.model.decode(env, "sample", generator=self.gen)
+        if self.cfg.direction:  # the first step's distribution comes with the sample
+            order, logp, first = self.model.decode_first(env, "sample", generator=self.gen)
+        else:
+            order, logp = self.model.decode(env, "sample", generator=self.gen)
         rep = env.repeat(order.shape[0] // env.shape[0])
         with torch.no_grad():
             cost = tour_cost(rep, order, choose_heads(rep, order, self.cfg.head_rule))
@@ -291,7 +294,7 @@ class Trainer:
             value = self.model.critic(env)
             loss = ((c - value.detach()) * logp).mean()
             if self.cfg.direction:
-                loss = loss + self._direction_loss(env, order, c)
+                loss = loss + self._direction_loss(env, order, c, first)
             critic_loss = torch.nn.functional.mse_loss(value, c)
             total = loss + critic_loss
         else:
@@ -306,7 +309,8 @@ class Trainer:
             opt.step()
         return float(loss.detach()), -float(cost.mean()), float(critic_loss.detach())
 
-    def _direction_loss(self, env: EnvBatch, order: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
+    def _direction_loss(self, env: EnvBatch, order: torch.Tensor, c: torch.Tensor,
+                        first: torch.Tensor) -> torch.Tensor:
         """The direction term: prefer the cheaper of each sampled tour and the same tour flown
         backwards, through the log-odds of their first steps.
 
@@ -317,10 +321,10 @@ class Trainer:
         at the same state) and ``s = sign(c_rev - c)``, the term is
         ``mean(|c - c_rev| * softplus(-s (lp - lp_rev)))``, a logistic loss weighted by what the
         wrong direction costs: it pulls hardest where the policy prefers the costlier direction
-        and fades once it prefers the cheaper one.
+        and fades once it prefers the cheaper one. ``first`` ``(B, K)``: the first step's
+        log-probabilities (:meth:`solvers.drl.PointerPolicy.decode_first`).
         """
         rev = order.flip(-1)
-        first = self.model.first_logprobs(env)  # (B, K): both first steps in one pass
         lp, lp_rev = first.gather(1, torch.stack([order[:, 0], rev[:, 0]], 1)).unbind(1)
         with torch.no_grad():
             c_rev = (tour_cost(env, rev, choose_heads(env, rev, self.cfg.head_rule))

@@ -66,9 +66,11 @@ def test_forced_decoding_scores_the_given_order(options):
             assert head.shape == (16, 1)
             first[j] = lp.exp()
             torch.testing.assert_close(first[j], sum(v for p, v in prob.items() if p[0] == j))
-        # one pass gives every first step's log-probability, as the one-step prefixes do
-        torch.testing.assert_close(model.first_logprobs(env).exp(),
-                                   torch.stack([first[j] for j in range(3)], 1))
+        # decode_first gives every first step's log-probability, as the one-step prefixes do,
+        # and decodes what decode does
+        o2, l2, lp_first = model.decode_first(env, "sample", generator=torch.Generator().manual_seed(1))
+        assert torch.equal(o2, order) and torch.equal(l2, logp)
+        torch.testing.assert_close(lp_first.exp(), torch.stack([first[j] for j in range(3)], 1))
     torch.testing.assert_close(sum(prob.values()), torch.ones(16))
     torch.testing.assert_close(sum(first.values()), torch.ones(16))
 

@@ -64,7 +64,8 @@ def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
 
     trainer = Trainer(_cfg(direction=True), tmp_path / "p.pt")
     env = trainer.batch_env()
-    order, _ = trainer.model.decode(env, "sample", generator=torch.Generator().manual_seed(0))
+    order, _, first = trainer.model.decode_first(env, "sample",
+                                                 generator=torch.Generator().manual_seed(0))
     rev = order.flip(-1)
     with torch.no_grad():
         c = (tour_cost(env, order, choose_heads(env, order, "paper")) / COST_SCALE).float()
@@ -75,7 +76,7 @@ def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
         return (trainer.model.decode(env, forced=order[:, :1])[1]
                 - trainer.model.decode(env, forced=rev[:, :1])[1])
 
-    loss = trainer._direction_loss(env, order, c)
+    loss = trainer._direction_loss(env, order, c, first)
     expect = ((c - c_rev).abs() * torch.nn.functional.softplus(-(c_rev - c).sign() * log_odds()))
     torch.testing.assert_close(loss, expect.mean())
     with torch.no_grad():
@@ -89,7 +90,8 @@ def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
         assert ((c_rev - c) * log_odds()).mean() > before
     trainer.model.zero_grad()
     c_same = (tour_cost(env, rev, choose_heads(env, rev, "paper")) / COST_SCALE).float()
-    trainer._direction_loss(env, order, c_same).backward()  # equal costs: no signal
+    first = trainer.model.decode_first(env, forced=order[:, :1])[2]
+    trainer._direction_loss(env, order, c_same, first).backward()  # equal costs: no signal
     assert all(p.grad is None or not p.grad.any() for p in trainer.model.parameters())
 
 
