@@ -205,8 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", "-o", metavar="DIR", help="output folder (default: results)")
     p.add_argument("--instance-dir", default="instances", metavar="DIR",
                    help="where instance sets are kept (default: instances)")
-    p.add_argument("--checkpoints", default="solvers/checkpoints", metavar="DIR",
-                   help="where <model>.train.csv training logs are (default: solvers/checkpoints)")
+    p.add_argument("--checkpoints", default=None, metavar="DIR",
+                   help="where <model>.train.csv training logs are (default: the shipped "
+                        "checkpoints, gtsp_bench/solvers/learned/checkpoints)")
     p.add_argument("--fresh", action="store_true", help="redo solves already in the task log")
     p.add_argument("--report-only", action="store_true",
                    help="only refresh OUT/README.md from the CSV files")
@@ -297,7 +298,7 @@ def _train_recipe(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
 def _cmd_train(args: argparse.Namespace) -> int:
     import math
 
-    from solvers.train import TrainConfig, train
+    from gtsp_bench.solvers.learned.train import TrainConfig, train
 
     options, direction = _train_recipe(args)
     cfg = TrainConfig(model=args.model, clusters=args.clusters, nodes=args.nodes,

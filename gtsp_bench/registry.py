@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from importlib.metadata import entry_points
 from typing import Any, Protocol, runtime_checkable
 
 from gtsp_bench.energy import Energy, check_omega, evaluate
@@ -202,11 +203,34 @@ def register_solver(
     _REGISTRY[name] = SolverSpec(name, target, description, bench)
 
 
+#: Entry-point group through which other packages register solvers.
+ENTRY_POINT_GROUP = "gtsp_bench.solvers"
+
+
+def _load_entry_points() -> None:
+    """Register the solvers other installed packages declare in :data:`ENTRY_POINT_GROUP`.
+
+    An entry point ``name = "package.module:Class"`` registers ``Class`` under ``name``; the class
+    is imported only when used. A name that is already taken is skipped with a warning.
+    """
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name in _REGISTRY:
+            print(f"gtsp-bench: warning: solver {ep.name!r} from entry point {ep.value!r} "
+                  "is already registered; skipped", file=sys.stderr)
+            continue
+        dist = getattr(ep, "dist", None)
+        origin = f" (from {dist.name})" if dist is not None else ""
+        _REGISTRY[ep.name] = SolverSpec(ep.name, ep.value, f"plug-in {ep.value}{origin}")
+
+
 def _registry() -> dict[str, SolverSpec]:
     global _builtins_loaded
     if not _builtins_loaded:
         _builtins_loaded = True
-        importlib.import_module("solvers")  # registers the built-in solvers (cheap imports only)
+        # Plain data (no import of this module back), then the installed plug-ins.
+        for b in importlib.import_module("gtsp_bench.solvers").BUILTIN:
+            _REGISTRY.setdefault(b.name, SolverSpec(b.name, b.target, b.description, b.bench))
+        _load_entry_points()
     return _REGISTRY
 
 

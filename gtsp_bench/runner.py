@@ -186,6 +186,14 @@ def resolve_references(reference: str | None, ks: Iterable[int], registered: Seq
     return out
 
 
+def shipped_checkpoints() -> Path:
+    """The folder of the shipped models and their training logs (``solvers/learned/checkpoints``
+    in the repository), found without importing the learned solvers."""
+    import gtsp_bench.solvers
+
+    return Path(gtsp_bench.solvers.__file__).resolve().parent / "learned" / "checkpoints"
+
+
 def make_config(
     *,
     experiments: str | Sequence[str] = "all",
@@ -200,7 +208,7 @@ def make_config(
     quick: bool = False,
     out_dir: str | os.PathLike[str] | None = None,
     instance_dir: str | os.PathLike[str] = "instances",
-    checkpoint_dir: str | os.PathLike[str] = "solvers/checkpoints",
+    checkpoint_dir: str | os.PathLike[str] | None = None,
     fresh: bool = False,
     progress: bool = True,
 ) -> BenchConfig:
@@ -254,7 +262,8 @@ def make_config(
         references=resolve_references(reference, k_tuple, registered),
         n_instances=n_inst, n_nodes=n_nodes, seed=int(seed), time_limit=tl, jobs=n_jobs,
         quick=quick, out_dir=Path(out_dir), instance_dir=Path(instance_dir),
-        checkpoint_dir=Path(checkpoint_dir), fresh=fresh, progress=progress,
+        checkpoint_dir=Path(checkpoint_dir) if checkpoint_dir is not None else shipped_checkpoints(),
+        fresh=fresh, progress=progress,
         omegas=QUICK_OMEGAS if quick else OMEGAS,
     )
 

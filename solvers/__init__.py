@@ -1,37 +1,60 @@
-"""Built-in solvers, one module each. Registering one is one line below.
+"""Built-in solvers, grouped by kind: ``exact/``, ``heuristics/``, ``learned/``, ``peers/``.
 
-Targets are ``"module:Class"`` strings so that a solver's heavy imports (torch, highspy,
-ortools, ...) happen only when it is used. To add your own, see the README ("Adding a solver").
+This folder is installed as ``gtsp_bench.solvers``. Adding a built-in solver is one class in a file
+under it plus one line in :data:`BUILTIN` below. Targets are ``"module:Class"`` strings so that a
+solver's heavy imports (torch, highspy, ortools, ...) happen only when it is used; this module
+imports nothing of the project, so the registry can read it without an import cycle. Solvers from
+other packages register through the ``gtsp_bench.solvers`` entry-point group instead (see
+``docs/adding-a-solver.md``).
 """
 
-from gtsp_bench.registry import register_solver
+from __future__ import annotations
 
-register_solver("greedy", "solvers.greedy:Greedy",
-                "paper's greedy: next (cluster, head) with the least added weighted energy")
-register_solver("brute", "solvers.brute:Brute",
-                "exhaustive search over orders and heads (exact; tiny instances only)", bench=False)
-register_solver("dp", "solvers.dp:DynamicProgramming",
-                "Held-Karp DP over (visited clusters, last node): exact, fast up to K ~ 12",
-                bench=False)
-register_solver("aco", "solvers.aco:Aco",
-                "paper's ACO baseline (Yang et al. 2008 ant system; 30 ants, 200 iterations)")
-register_solver("aco+ls", "solvers.aco:AcoLS", "aco, then the shared 2-opt/or-opt/heads local search")
-register_solver("greedy+ls", "solvers.local_search:GreedyLS",
-                "greedy, then the shared 2-opt/or-opt/heads local search")
-register_solver("lns", "solvers.lns:Lns",
-                "GLNS-style large neighbourhood search + local search (seeded, time-limited)")
-register_solver("pyvrp", "solvers.pyvrp_peer:PyVRPPeer",
-                "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
-                bench=False)
-register_solver("drl", "solvers.drl:DRL",
-                "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule")
-register_solver("drl-sample", "solvers.drl:DRLSample",
-                "paper's policy: best of the greedy and 64 sampled tours", bench=False)
-register_solver("am", "solvers.am:AM",
-                "attention model, best of K greedy POMO starts, optimal heads for the order")
-register_solver("milp", "solvers.milp:Milp",
-                "HiGHS MILP: lifted subtour cuts, pricing, own branch and cut (exact; the reference)",
-                bench=False)
-register_solver("gurobi", "solvers.gurobi:Gurobi",
-                "the milp model through gurobipy, lazy subtour rows (exact; optional extra)",
-                bench=False)
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Builtin:
+    """One built-in solver: its name, ``"module:Class"``, a one-line description, and whether
+    the runner uses it by default (``False`` for test oracles, duplicates and optional extras)."""
+
+    name: str
+    target: str
+    description: str
+    bench: bool = True
+
+
+_H = "gtsp_bench.solvers.heuristics"
+_E = "gtsp_bench.solvers.exact"
+_L = "gtsp_bench.solvers.learned"
+_P = "gtsp_bench.solvers.peers"
+
+BUILTIN: tuple[Builtin, ...] = (
+    Builtin("greedy", f"{_H}.greedy:Greedy",
+            "paper's greedy: next (cluster, head) with the least added weighted energy"),
+    Builtin("greedy+ls", f"{_H}.local_search:GreedyLS",
+            "greedy, then the shared 2-opt/or-opt/heads local search"),
+    Builtin("aco", f"{_H}.aco:Aco",
+            "paper's ACO baseline (Yang et al. 2008 ant system; 30 ants, 200 iterations)"),
+    Builtin("aco+ls", f"{_H}.aco:AcoLS", "aco, then the shared 2-opt/or-opt/heads local search"),
+    Builtin("lns", f"{_H}.lns:Lns",
+            "GLNS-style large neighbourhood search + local search (seeded, time-limited)"),
+    Builtin("brute", f"{_E}.brute:Brute",
+            "exhaustive search over orders and heads (exact; tiny instances only)", bench=False),
+    Builtin("dp", f"{_E}.dp:DynamicProgramming",
+            "Held-Karp DP over (visited clusters, last node): exact, fast up to K ~ 12", bench=False),
+    Builtin("milp", f"{_E}.milp:Milp",
+            "HiGHS MILP: lifted subtour cuts, pricing, own branch and cut (exact; the reference)",
+            bench=False),
+    Builtin("gurobi", f"{_E}.gurobi:Gurobi",
+            "the milp model through gurobipy, lazy subtour rows (exact; optional extra)", bench=False),
+    Builtin("drl", f"{_L}.drl:DRL",
+            "paper's Seq2Seq pointer policy (LSTM decoder), greedy, paper's head rule"),
+    Builtin("drl-sample", f"{_L}.drl:DRLSample",
+            "paper's policy: best of the greedy and 64 sampled tours", bench=False),
+    Builtin("am", f"{_L}.am:AM",
+            "attention model, best of K greedy POMO starts, optimal heads for the order"),
+    Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
+            "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
+            bench=False),
+)

@@ -27,7 +27,7 @@ class Slow:
     """Greedy after a 0.1 s pause: a run long enough to be killed midway."""
 
     def solve(self, instance, omega, *, time_limit=None, seed=0):
-        from solvers.greedy import Greedy
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
 
         time.sleep(0.1)
         return Greedy().solve(instance, omega)
@@ -40,7 +40,7 @@ class DieAboveHalf:
     def solve(self, instance, omega, *, time_limit=None, seed=0):
         import os
 
-        from solvers.greedy import Greedy
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
 
         if omega > 0.5:
             os._exit(3)
@@ -75,7 +75,7 @@ class _GreedyAfterImport:
     def solve(self, instance, omega, *, time_limit=None, seed=0):
         import importlib
 
-        from solvers.greedy import Greedy
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
 
         lib = importlib.import_module(self.module)
         sol = Greedy().solve(instance, omega)

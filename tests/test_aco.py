@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import pytest
+from gtsp_bench.solvers.heuristics.aco import Aco
 
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.io import read_instance
 from gtsp_bench.registry import get_solver, run_solver
-from solvers.aco import Aco
 
 from .conftest import GTSPLIB
 from .tiny_cases import tiny_case

@@ -7,11 +7,12 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
+from gtsp_bench.solvers.learned.am import AttentionPolicy  # noqa: E402
+from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR, make_env, save_policy  # noqa: E402
+
 from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
 from gtsp_bench.instance import Instance  # noqa: E402
 from gtsp_bench.registry import get_solver, run_solver  # noqa: E402
-from solvers.am import AttentionPolicy  # noqa: E402
-from solvers.rl_common import CHECKPOINT_DIR, make_env, save_policy  # noqa: E402
 
 
 def _tiny() -> AttentionPolicy:

@@ -6,13 +6,13 @@ import itertools
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.exact.brute import Brute, count_tours
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.registry import run_solver
-from solvers.brute import Brute, count_tours
 
 
 def _enumerate(instance: Instance, omega: float) -> float:

@@ -10,12 +10,13 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
+from gtsp_bench.solvers.learned.drl import PointerPolicy  # noqa: E402
+from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR, make_env, save_policy  # noqa: E402
+
 from gtsp_bench.cli import main  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
 from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
 from gtsp_bench.registry import get_solver, run_solver  # noqa: E402
-from solvers.drl import PointerPolicy  # noqa: E402
-from solvers.rl_common import CHECKPOINT_DIR, make_env, save_policy  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -109,7 +110,7 @@ def test_unvisited_glimpse_gives_visited_elements_zero_weight():
 
 def test_glimpse_option_is_saved_and_checked(tmp_path):
     """The glimpse setting round-trips through a policy file; a bad one is a clear InputError."""
-    from solvers.rl_common import load_policy
+    from gtsp_bench.solvers.learned.rl_common import load_policy
 
     path = tmp_path / "g.pt"
     save_policy(PointerPolicy(n_nodes=3, dim=8, glimpse="unvisited"), path)
@@ -126,7 +127,7 @@ def test_local_term_reads_the_uav_location_of_the_paper_rule():
     output layer zero it decodes as the model without it; otherwise the probabilities change, and
     the distances it is fed are those from the heads the paper's rule picks along the decoded
     order (the depot first), recorded through a hook."""
-    from solvers.rl_common import AREA_SCALE, paper_heads
+    from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, paper_heads
 
     b, k = 64, 6
     env = make_env(generate_batch(np.random.default_rng(7), b, k, 5), np.linspace(0, 1, b))
@@ -160,7 +161,7 @@ def test_local_term_reads_the_uav_location_of_the_paper_rule():
 
 def test_local_option_is_saved_and_checked(tmp_path):
     """The local setting round-trips through a policy file; a non-bool is a clear InputError."""
-    from solvers.rl_common import load_policy
+    from gtsp_bench.solvers.learned.rl_common import load_policy
 
     path = tmp_path / "l.pt"
     save_policy(PointerPolicy(n_nodes=3, dim=8, local=True), path)
@@ -175,7 +176,7 @@ def test_damp_leaves_the_training_k_alone_and_weights_the_pointer_beyond_it():
     """damp = D scales the pointer's logits by min(1, D / clusters left): up to D clusters the
     policy is exactly the undamped one; with more, the first step's probabilities are those of
     pointer * D / K + local term (checked against a hand computation); damp needs local."""
-    from solvers.rl_common import CLIP
+    from gtsp_bench.solvers.learned.rl_common import CLIP
 
     torch.manual_seed(5)
     plain = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", local=True)
@@ -213,7 +214,7 @@ def test_energy_features_are_the_paper_rules_next_step():
     """energy=True feeds, per cluster, the energy the paper's rule pays to enter it from the UAV's
     location (kJ) and the distance from the head it picks to the depot: the same as one step of
     paper_head_step, priced by hand; the depot's column is 0; energy needs local."""
-    from solvers.rl_common import AREA_SCALE, paper_head_step
+    from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, paper_head_step
 
     b, k = 16, 5
     env = make_env(generate_batch(np.random.default_rng(1), b, k, 6), np.linspace(0, 1, b))

@@ -7,12 +7,12 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.exact import gtsp_mip as gm
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
-from solvers import gtsp_mip as gm
 
 
 def _model(seed: int, k: int = 5, depot: bool = True, max_size: int = 3) -> gm.GtspModel:
@@ -80,7 +80,7 @@ def test_every_cut_is_valid_and_violated(monkeypatch):
     HiGHS provides the LP points (root loop and branch and cut on tiny instances, no pruning and
     a small core so that all separators and the branching run).
     """
-    from solvers.milp import Milp
+    from gtsp_bench.solvers.exact.milp import Milp
 
     seen = _capture(monkeypatch)
     found: Counter[str] = Counter()

@@ -63,8 +63,8 @@ def test_time_already_up_stops_instead_of_raising():
     """The solve passes the seconds left, which can be just below 0 by the time Gurobi is called:
     that is a stop (no answer), not a GurobiError about a negative TimeLimit."""
     pytest.importorskip("gurobipy")
-    from solvers import gtsp_mip as gm
-    from solvers.gurobi import GurobiBackend
+    from gtsp_bench.solvers.exact import gtsp_mip as gm
+    from gtsp_bench.solvers.exact.gurobi import GurobiBackend
 
     problem = price(generate_instance(6, 4, seed=2), 0.5)
     model = gm.build_model(problem, problem.clusters)

@@ -6,11 +6,11 @@ import itertools
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.heads import optimal_heads
 
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
-from solvers.heads import optimal_heads
 
 
 def _best_over_heads(problem, order):

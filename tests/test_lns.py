@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.heuristics.lns import LnsSettings
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import read_instance
 from gtsp_bench.registry import get_solver, run_solver
-from solvers.lns import LnsSettings
 
 from .conftest import GTSPLIB
 from .tiny_cases import tiny_case

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.heuristics.local_search import LocalSearch, Move, anchor_node, deadline_after, improve
 
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
-from solvers.local_search import LocalSearch, Move, anchor_node, deadline_after, improve
 
 from .conftest import GTSPLIB
 from .tiny_cases import tiny_case

@@ -8,6 +8,8 @@ import sys
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.exact import gtsp_mip as gm
+from gtsp_bench.solvers.exact.milp import HighsBackend, Milp
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -17,8 +19,6 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
-from solvers import gtsp_mip as gm
-from solvers.milp import HighsBackend, Milp
 
 from .conftest import GTSPLIB, REPO
 
@@ -164,7 +164,7 @@ def test_bad_options_and_input_are_refused():
 
 def test_importing_milp_does_not_import_highspy():
     """highspy is imported when solving only (it cannot share a process with ortools)."""
-    code = ("import sys, solvers.milp, solvers.gurobi; "
+    code = ("import sys, gtsp_bench.solvers.exact.milp, gtsp_bench.solvers.exact.gurobi; "
             "print('highspy' in sys.modules, 'gurobipy' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                          check=True).stdout

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from gtsp_bench.checks import check_float, check_int, default_time_limit
 from gtsp_bench.errors import InputError
-from solvers.options import check_float, check_int, default_time_limit
 
 
 def test_check_int():

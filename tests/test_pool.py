@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import math
 
+from gtsp_bench.solvers.heuristics.greedy import Greedy
+
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.parse import format_json_instance
 from gtsp_bench.pool import run_jobs, solve_message
-from solvers.greedy import Greedy
 
 from .runner_solvers import Crash
 

@@ -6,12 +6,12 @@ import itertools
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.exact.prune import prune_heads
 
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import run_solver
-from solvers.prune import prune_heads
 
 
 def best_over(problem: Problem, kept: tuple[np.ndarray, ...]) -> float:

@@ -114,7 +114,8 @@ def test_import_path_for_worker_processes():
     exists in this process (defined in a function, or in __main__) has none."""
     from gtsp_bench.registry import SolverSpec
 
-    assert SolverSpec("g", "solvers.greedy:Greedy", "").import_path() == "solvers.greedy:Greedy"
+    target = "gtsp_bench.solvers.heuristics.greedy:Greedy"
+    assert SolverSpec("g", target, "").import_path() == target
     assert SolverSpec("f", Fixed, "").import_path() == "tests.test_registry:Fixed"
 
     class Local(Fixed):
@@ -131,8 +132,9 @@ def test_solver_revision_is_the_learned_checkpoints_hash():
     """drl's revision is a hash of its shipped weights; a solver without one has ""."""
     import hashlib
 
+    from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR
+
     from gtsp_bench.registry import solver_revision
-    from solvers.rl_common import CHECKPOINT_DIR
 
     digest = hashlib.sha256((CHECKPOINT_DIR / "drl.pt").read_bytes()).hexdigest()[:12]
     assert solver_revision("drl") == solver_revision("drl-sample") == digest

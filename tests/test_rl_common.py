@@ -7,15 +7,9 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from gtsp_bench.energy import evaluate, evaluate_batch  # noqa: E402
-from gtsp_bench.errors import InputError  # noqa: E402
-from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
-from gtsp_bench.instance import Instance  # noqa: E402
-from gtsp_bench.problem import price  # noqa: E402
-from gtsp_bench.registry import run_solver  # noqa: E402
-from solvers.drl import PointerPolicy  # noqa: E402
-from solvers.heads import optimal_heads  # noqa: E402
-from solvers.rl_common import (  # noqa: E402
+from gtsp_bench.solvers.heads import optimal_heads  # noqa: E402
+from gtsp_bench.solvers.learned.drl import PointerPolicy  # noqa: E402
+from gtsp_bench.solvers.learned.rl_common import (  # noqa: E402
     env_from_instances,
     exact_by_enumeration,
     load_policy,
@@ -27,6 +21,13 @@ from solvers.rl_common import (  # noqa: E402
     save_policy,
     tour_cost,
 )
+
+from gtsp_bench.energy import evaluate, evaluate_batch  # noqa: E402
+from gtsp_bench.errors import InputError  # noqa: E402
+from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
+from gtsp_bench.instance import Instance  # noqa: E402
+from gtsp_bench.problem import price  # noqa: E402
+from gtsp_bench.registry import run_solver  # noqa: E402
 
 
 def _random_orders(rng: np.random.Generator, b: int, k: int) -> torch.Tensor:
@@ -63,7 +64,8 @@ def test_mirror_keeps_every_cost():
 
 
 def test_heads_match_the_numpy_rules():
-    """Batched optimal heads equal solvers.heads.optimal_heads; paper heads follow eq. chselection."""
+    """Batched optimal heads equal gtsp_bench.solvers.heads.optimal_heads; paper heads follow
+    eq. chselection."""
     rng = np.random.default_rng(4)
     k, n = 4, 5
     instances = [generate_instance(k, n, seed=i) for i in range(8)]

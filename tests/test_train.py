@@ -14,10 +14,11 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
+from gtsp_bench.solvers.learned.rl_common import load_policy  # noqa: E402
+from gtsp_bench.solvers.learned.train import TrainConfig, Trainer, output_paths, train  # noqa: E402
+
 from gtsp_bench.cli import main  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
-from solvers.rl_common import load_policy  # noqa: E402
-from solvers.train import TrainConfig, Trainer, output_paths, train  # noqa: E402
 
 from .conftest import REPO  # noqa: E402
 
@@ -60,7 +61,7 @@ def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
     log-probability of a tour's first step; a gradient step on it alone raises the log-odds of
     the cheaper direction (weighted by the cost gap), and pairs that cost the same give it no
     gradient."""
-    from solvers.rl_common import COST_SCALE, choose_heads, tour_cost
+    from gtsp_bench.solvers.learned.rl_common import COST_SCALE, choose_heads, tour_cost
 
     trainer = Trainer(_cfg(direction=True), tmp_path / "p.pt")
     env = trainer.batch_env()

@@ -8,7 +8,7 @@
   moved single cluster gets the best head between its new neighbours, a longer run's outer
   end(s) get the best head for their new outer neighbour (for a run of 2, only the end facing
   the tour before the run, its partner keeping its head);
-* **heads**: when no move improves, :func:`solvers.heads.optimal_heads` re-optimises all heads for
+* **heads**: when no move improves, :func:`gtsp_bench.solvers.heads.optimal_heads` re-optimises all heads for
   the current order (a layered shortest path); if that helps, the moves start again.
 
 Moves are priced exactly and the best one is applied (best improvement), so the cost strictly
@@ -27,13 +27,13 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics.greedy import Greedy
 
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution, check_time_limit
-from solvers.greedy import Greedy
-from solvers.heads import optimal_heads
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
 REL_TOL = 1e-9
@@ -263,7 +263,7 @@ class LocalSearch:
 
     # ------------------------------------------------------------------ the search
     def reoptimise_heads(self, t: np.ndarray) -> tuple[np.ndarray, float]:
-        """Optimal heads for the order of ``t`` (:func:`solvers.heads.optimal_heads`)."""
+        """Optimal heads for the order of ``t`` (:func:`gtsp_bench.solvers.heads.optimal_heads`)."""
         p = self.problem
         if p.depot is not None:
             start = int(np.flatnonzero(t == p.depot)[0])
@@ -378,7 +378,8 @@ def improved_solution(
 
 
 class GreedyLS(Greedy):
-    """The paper's greedy (:class:`solvers.greedy.Greedy`), then :func:`improve` on its tour."""
+    """The paper's greedy (:class:`gtsp_bench.solvers.heuristics.greedy.Greedy`), then
+    :func:`improve` on its tour."""
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,

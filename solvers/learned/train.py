@@ -34,14 +34,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from torch import nn
-
-from gtsp_bench.energy import check_omega
-from gtsp_bench.errors import InputError
-from gtsp_bench.generator import check_generator_args, generate_batch
-from gtsp_bench.io import atomic_write_bytes, atomic_write_text
-from solvers.options import check_float, check_int
-from solvers.rl_common import (
+from gtsp_bench.solvers.learned.rl_common import (
     COST_SCALE,
     HEAD_RULES,
     EnvBatch,
@@ -52,6 +45,13 @@ from solvers.rl_common import (
     save_policy,
     tour_cost,
 )
+from torch import nn
+
+from gtsp_bench.checks import check_float, check_int
+from gtsp_bench.energy import check_omega
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import check_generator_args, generate_batch
+from gtsp_bench.io import atomic_write_bytes, atomic_write_text
 
 MODELS = ("drl", "am")
 DEFAULT_HEADS = {"drl": "paper", "am": "optimal"}
@@ -322,7 +322,7 @@ class Trainer:
         ``mean(|c - c_rev| * softplus(-s (lp - lp_rev)))``, a logistic loss weighted by what the
         wrong direction costs: it pulls hardest where the policy prefers the costlier direction
         and fades once it prefers the cheaper one. ``first`` ``(B, K)``: the first step's
-        log-probabilities (:meth:`solvers.drl.PointerPolicy.decode_first`).
+        log-probabilities (:meth:`gtsp_bench.solvers.learned.drl.PointerPolicy.decode_first`).
         """
         rev = order.flip(-1)
         lp, lp_rev = first.gather(1, torch.stack([order[:, 0], rev[:, 0]], 1)).unbind(1)

@@ -1,9 +1,11 @@
-"""``milp``: the GTSP MILP of :mod:`solvers.gtsp_mip` solved exactly, with HiGHS as LP solver.
+"""``milp``: the GTSP MILP of :mod:`gtsp_bench.solvers.exact.gtsp_mip` solved exactly, with HiGHS
+as LP solver.
 
 highspy 1.15.1 has no working lazy-constraint callback (it exists but never fires, and its input
 cannot add rows), and HiGHS's own MILP, re-solved after each solution with subtours, stalled on
 instances whose root gap stayed open. So HiGHS solves LPs only: the root loop and the branch and
-cut of :func:`solvers.gtsp_mip.solve_exact` add the cuts, price the columns and branch. "optimal"
+cut of :func:`gtsp_bench.solvers.exact.gtsp_mip.solve_exact` add the cuts, price the columns and
+branch. "optimal"
 means proven to ``abs_gap`` (1e-6; with integer costs, to below 1).
 
 highspy is imported when a backend is built only (it cannot share a process with ortools).
@@ -13,16 +15,15 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-
-from solvers.gtsp_mip import LpResult, MipOptions, MipSolver
+from gtsp_bench.solvers.exact.gtsp_mip import LpResult, MipOptions, MipSolver
 
 
 class HighsBackend:
-    """A ``highspy.Highs`` object behind the :class:`solvers.gtsp_mip.Backend` protocol.
+    """A ``highspy.Highs`` object behind the :class:`gtsp_bench.solvers.exact.gtsp_mip.Backend` protocol.
 
     It is an LP solver only: highspy has no working lazy constraints, so
-    :func:`solvers.gtsp_mip.solve_exact` branches itself (HiGHS's own MILP, re-solved after each
-    subtour solution, stalled on instances whose root gap stayed open).
+    :func:`gtsp_bench.solvers.exact.gtsp_mip.solve_exact` branches itself (HiGHS's own MILP, re-solved
+    after each subtour solution, stalled on instances whose root gap stayed open).
     """
 
     def __init__(self, options: MipOptions) -> None:
@@ -81,7 +82,7 @@ class HighsBackend:
 
 
 class Milp(MipSolver):
-    """Exact GTSP by MILP with HiGHS (options: :class:`solvers.gtsp_mip.MipSolver`)."""
+    """Exact GTSP by MILP with HiGHS (options: :class:`gtsp_bench.solvers.exact.gtsp_mip.MipSolver`)."""
 
     def backend(self, options: MipOptions) -> HighsBackend:
         """A new, empty HiGHS backend."""

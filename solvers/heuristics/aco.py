@@ -20,13 +20,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, improved_solution, is_past
 
+from gtsp_bench.checks import check_float, check_int
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
-from solvers.greedy import greedy_tour
-from solvers.local_search import anchor_node, deadline_after, improved_solution, is_past
-from solvers.options import check_float, check_int
 
 
 def aco_search(
@@ -161,7 +161,7 @@ class Aco:
 
 
 class AcoLS(Aco):
-    """:class:`Aco`, then the shared local search (:mod:`solvers.local_search`) on its best tour,
-    in the time left."""
+    """:class:`Aco`, then the shared local search
+    (:mod:`gtsp_bench.solvers.heuristics.local_search`) on its best tour, in the time left."""
 
     local_search = True

@@ -1,6 +1,6 @@
 """The exact solvers' GTSP MILP, written once for every LP/MIP library.
 
-Formulation over the candidate heads left by :func:`solvers.prune.prune_heads` (node ``i`` in
+Formulation over the candidate heads left by :func:`gtsp_bench.solvers.exact.prune.prune_heads` (node ``i`` in
 GTSP cluster ``c(i)``; the depot, when there is one, is a cluster of one node):
 
 * ``y_i`` in {0, 1}: node ``i`` is its cluster's head; ``x_e`` in {0, 1} for every edge
@@ -15,13 +15,14 @@ GTSP cluster ``c(i)``; the depot, when there is one, is a cluster of one node):
   ``x(E(side)) + sum_i a_i y_i <= b``: a :class:`Cuts` block stores ``side``, ``a`` and ``b``.
 
 A tour through three or fewer clusters needs no model: one cyclic order exists, and
-:func:`solvers.heads.optimal_heads` gives its optimal heads (one cluster: a single node; two: an
+:func:`gtsp_bench.solvers.heads.optimal_heads` gives its optimal heads (one cluster: a single node; two: an
 edge used twice).
 
 :func:`solve_exact` runs the method on any :class:`Backend` (a thin LP/MIP wrapper that knows
 nothing of the GTSP):
 
-1. an upper bound from the large neighbourhood search :class:`solvers.lns.Lns` (one trial);
+1. an upper bound from the large neighbourhood search
+   :class:`gtsp_bench.solvers.heuristics.lns.Lns` (one trial);
 2. exact pruning of candidate heads;
 3. a root loop on the LP relaxation over a core of cheap edges: columns of negative reduced cost
    are priced in, columns whose reduced cost exceeds the gap to the upper bound are fixed to 0,
@@ -50,18 +51,18 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.prune import prune_heads
+from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.lns import Lns
+from gtsp_bench.solvers.heuristics.local_search import anchor_node, improve
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
+from gtsp_bench.checks import check_float, check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
-from solvers.greedy import greedy_tour
-from solvers.heads import optimal_heads
-from solvers.lns import Lns
-from solvers.local_search import anchor_node, improve
-from solvers.options import check_float, check_int
-from solvers.prune import prune_heads
 
 #: Values above this count as 1 in an integer solution.
 _HALF = 0.5
@@ -116,7 +117,8 @@ class MipOptions:
 
 
 def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None) -> np.ndarray:
-    """A good tour: :class:`solvers.lns.Lns` with ``trials`` trials (0: greedy + local search)."""
+    """A good tour: :class:`gtsp_bench.solvers.heuristics.lns.Lns` with ``trials`` trials
+    (0: greedy + local search)."""
     if trials == 0:
         return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
     sol = Lns(trials=trials).solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)

@@ -31,13 +31,13 @@ import numpy as np
 import torch
 from torch import nn
 
+from gtsp_bench.checks import check_int
 from gtsp_bench.energy import check_omega, cluster_ground_energy
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import atomic_write_bytes
 from gtsp_bench.params import EnergyParams
 from gtsp_bench.registry import Solution
-from solvers.options import check_int
 
 #: Coordinates are divided by this (m) before they enter a model.
 AREA_SCALE = 1000.0
@@ -275,7 +275,7 @@ def paper_heads(env: EnvBatch, order: torch.Tensor) -> torch.Tensor:
 def optimal_heads_batch(env: EnvBatch, order: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Best heads for fixed cluster orders: a shortest path through the layers, batched.
 
-    The batched form of :func:`solvers.heads.optimal_heads`; O(B K N^2).
+    The batched form of :func:`gtsp_bench.solvers.heads.optimal_heads`; O(B K N^2).
 
     Returns
     -------
@@ -423,8 +423,8 @@ def choose(logits: torch.Tensor, visited: torch.Tensor, mode: str,
 # ---------------------------------------------------------------------- checkpoints
 def build_model(config: dict[str, Any]) -> nn.Module:
     """The policy described by ``config`` (its ``"model"`` key names the class)."""
-    from solvers.am import AttentionPolicy
-    from solvers.drl import PointerPolicy
+    from gtsp_bench.solvers.learned.am import AttentionPolicy
+    from gtsp_bench.solvers.learned.drl import PointerPolicy
 
     classes = {"drl": PointerPolicy, "am": AttentionPolicy}
     name = config.get("model")
@@ -492,7 +492,7 @@ class LearnedSolver:
     Parameters
     ----------
     checkpoint
-        Policy file; default: the shipped ``solvers/checkpoints/<model>.pt``.
+        Policy file; default: the shipped ``solvers/learned/checkpoints/<model>.pt``.
     heads
         ``"paper"`` (the paper's rule, eq. "chselection") or ``"optimal"`` (the best heads for the
         decoded order, a shortest path).

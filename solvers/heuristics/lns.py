@@ -7,7 +7,8 @@ Each iteration removes some clusters from the current tour and puts them back:
 * insertion: **cheapest** (repeatedly the (cluster, position, head) adding least) or **randomised**
   (clusters in random order, each at its cheapest position and head with some noise);
 
-then the shared local search (:mod:`solvers.local_search`: 2-opt, or-opt, optimal heads). The
+then the shared local search (:mod:`gtsp_bench.solvers.heuristics.local_search`: 2-opt, or-opt,
+optimal heads). The
 operators are drawn by roulette on adaptive weights (each updated with the score of its
 iterations: new best 3, better than the current 2, accepted 1, rejected 0). A new tour replaces
 the current one by simulated-annealing acceptance, with the temperature cooling geometrically
@@ -24,14 +25,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.local_search import LocalSearch, anchor_node, deadline_after, is_past
 
+from gtsp_bench.checks import check_float, check_int, default_time_limit
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution, check_time_limit
-from solvers.greedy import greedy_tour
-from solvers.local_search import LocalSearch, anchor_node, deadline_after, is_past
-from solvers.options import check_float, check_int, default_time_limit
 
 REMOVALS = ("random", "worst", "segment")
 INSERTIONS = ("cheapest", "randomised")

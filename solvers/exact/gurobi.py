@@ -1,4 +1,5 @@
-"""``gurobi``: the GTSP MILP of :mod:`solvers.gtsp_mip` solved exactly with Gurobi (gurobipy).
+"""``gurobi``: the GTSP MILP of :mod:`gtsp_bench.solvers.exact.gtsp_mip` solved exactly with
+Gurobi (gurobipy).
 
 The model, the root loop (pricing, cuts, reduced-cost fixing) and the separation are the ones
 ``milp`` uses; only the LP/MIP calls differ. Gurobi has lazy constraints, so after the root it
@@ -17,9 +18,9 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.gtsp_mip import LpResult, MipOptions, MipResult, MipSolver
 
 from gtsp_bench.errors import InputError
-from solvers.gtsp_mip import LpResult, MipOptions, MipResult, MipSolver
 
 #: gurobipy's error code for a model above the size-limited licence.
 _SIZE_LIMIT_ERROR = 10010
@@ -36,7 +37,7 @@ def import_gurobipy() -> Any:
 
 
 class GurobiBackend:
-    """A gurobipy model behind the :class:`solvers.gtsp_mip.LazyMipBackend` protocol."""
+    """A gurobipy model behind the :class:`gtsp_bench.solvers.exact.gtsp_mip.LazyMipBackend` protocol."""
 
     def __init__(self, options: MipOptions) -> None:
         gp = self.gp = import_gurobipy()
@@ -146,7 +147,7 @@ class GurobiBackend:
 
 
 class Gurobi(MipSolver):
-    """Exact GTSP by MILP with Gurobi (options: :class:`solvers.gtsp_mip.MipSolver`).
+    """Exact GTSP by MILP with Gurobi (options: :class:`gtsp_bench.solvers.exact.gtsp_mip.MipSolver`).
 
     Raises :class:`InputError` at once when gurobipy is not installed.
     """

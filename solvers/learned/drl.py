@@ -26,10 +26,7 @@ import math
 from typing import Any
 
 import torch
-from torch import nn
-
-from gtsp_bench.errors import InputError
-from solvers.rl_common import (
+from gtsp_bench.solvers.learned.rl_common import (
     AREA_SCALE,
     COST_SCALE,
     EnvBatch,
@@ -40,6 +37,9 @@ from solvers.rl_common import (
     rule_entry,
     step_logprobs,
 )
+from torch import nn
+
+from gtsp_bench.errors import InputError
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
 GLIMPSES = ("all", "unvisited")
@@ -252,7 +252,7 @@ class PointerPolicy(nn.Module):
 class DRL(LearnedSolver):
     """The paper's policy, greedy decoding; heads by the paper's rule (default) or optimal.
 
-    Default checkpoint: ``solvers/checkpoints/drl.pt``. Options: ``checkpoint``, ``heads``
+    Default checkpoint: ``solvers/learned/checkpoints/drl.pt``. Options: ``checkpoint``, ``heads``
     (``paper`` | ``optimal``), ``threads``, ``reverse`` (also fly the decoded tour backwards and
     keep the better direction under the head rule; default false, as the paper).
     """

@@ -17,9 +17,8 @@ import math
 from typing import Any
 
 import torch
+from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, choose, element_features
 from torch import nn
-
-from solvers.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, choose, element_features
 
 
 class AttentionPolicy(nn.Module):
@@ -120,7 +119,7 @@ class AttentionPolicy(nn.Module):
 class AM(LearnedSolver):
     """Attention model: the best of its K greedy tours (POMO starts), optimal heads by default.
 
-    Default checkpoint: ``solvers/checkpoints/am.pt``. Options: ``checkpoint``, ``heads``
+    Default checkpoint: ``solvers/learned/checkpoints/am.pt``. Options: ``checkpoint``, ``heads``
     (``optimal`` | ``paper``), ``samples`` (extra sampled tours per start, default 0),
     ``augment`` (also decode the mirrored instance, default false), ``reverse`` (also price each
     tour backwards; matters with the paper's heads only), ``threads``.

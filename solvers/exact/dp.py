@@ -129,8 +129,8 @@ class DynamicProgramming:
 
     @staticmethod
     def _fallback(problem: Problem) -> Solution:
-        from solvers.greedy import Greedy
-        from solvers.heads import optimal_heads
+        from gtsp_bench.solvers.heads import optimal_heads
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
 
         greedy = Greedy().solve(problem.instance, problem.omega)
         tour, _ = optimal_heads(problem, greedy.order)

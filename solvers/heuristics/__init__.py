@@ -1,0 +1,1 @@
+"""Heuristics: the paper's greedy and ACO, the shared local search, and LNS."""

@@ -1,0 +1,1 @@
+"""Learned policies: the paper's pointer network (drl) and an attention model (am)."""

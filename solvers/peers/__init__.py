@@ -1,0 +1,1 @@
+"""Other tools a user would otherwise pick, wrapped as solvers (optional extras)."""
