@@ -56,7 +56,7 @@ def _int(text: str) -> int:
 
 
 def _seed(text: str) -> int:
-    from gtsp_bench.registry import check_seed
+    from gtsp_bench.checks import check_seed
 
     try:
         return check_seed(_int(text))
@@ -252,7 +252,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from gtsp_bench.energy import check_omega, evaluate
+    from gtsp_bench.checks import check_omega
+    from gtsp_bench.energy import evaluate
     from gtsp_bench.errors import InfeasibleSolutionError
     from gtsp_bench.io import read_instance, read_solution
     from gtsp_bench.registry import Result

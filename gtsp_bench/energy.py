@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gtsp_bench.checks import check_omega
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.instance import Instance, tour_length
 from gtsp_bench.params import EnergyParams
@@ -52,16 +53,6 @@ class Evaluation:
     objective: float
     energy: Energy | None
     distance: float
-
-
-def check_omega(omega: float | None) -> float:
-    """Return ``omega`` as a float, or raise :class:`InputError` unless it is in [0, 1]."""
-    if isinstance(omega, bool) or not isinstance(omega, (int, float, np.integer, np.floating)):
-        raise InputError(f"omega must be a number in [0, 1], got {omega!r}")
-    value = float(omega)
-    if not 0.0 <= value <= 1.0:  # also rejects NaN
-        raise InputError(f"omega must be in [0, 1], got {omega!r}")
-    return value
 
 
 # ---------------------------------------------------------------------- ground network

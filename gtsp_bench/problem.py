@@ -21,7 +21,8 @@ from functools import cached_property
 
 import numpy as np
 
-from gtsp_bench.energy import check_omega, cluster_hover_energy, node_ground_energy
+from gtsp_bench.checks import check_omega
+from gtsp_bench.energy import cluster_hover_energy, node_ground_energy
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.instance import Instance, node_distance_matrix
 

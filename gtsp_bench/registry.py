@@ -12,7 +12,6 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
-import numbers
 import sys
 import time
 from collections.abc import Mapping
@@ -20,7 +19,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Any, Protocol, runtime_checkable
 
-from gtsp_bench.energy import Energy, check_omega, evaluate
+from gtsp_bench.checks import check_omega, check_seed, check_time_limit
+from gtsp_bench.energy import Energy, evaluate
 from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
 from gtsp_bench.instance import Instance
 
@@ -281,24 +281,6 @@ def get_solver(name: str, **options: Any) -> Solver:
 
 
 # ---------------------------------------------------------------------- harness
-def check_time_limit(time_limit: float | None) -> float | None:
-    """Return a valid time limit (seconds, > 0, or ``None``) or raise :class:`InputError`."""
-    if time_limit is None:
-        return None
-    if isinstance(time_limit, bool) or not isinstance(time_limit, (int, float)):
-        raise InputError(f"time limit must be a number of seconds, got {time_limit!r}")
-    if not time_limit > 0 or math.isnan(time_limit):
-        raise InputError(f"time limit must be > 0 seconds, got {time_limit!r}")
-    return float(time_limit)
-
-
-def check_seed(seed: int) -> int:
-    """Return a valid seed (an integer >= 0, as numpy's generators take) or raise :class:`InputError`."""
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
-        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
-    return int(seed)
-
-
 def run_solver(
     solver: Solver | str,
     instance: Instance,

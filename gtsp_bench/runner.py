@@ -222,7 +222,8 @@ def make_config(
     InputError
         A bad K, an unknown experiment, solver or reference, or a bad count or limit.
     """
-    from gtsp_bench.registry import check_seed, check_time_limit, solver_names, solver_specs
+    from gtsp_bench.checks import check_seed, check_time_limit
+    from gtsp_bench.registry import solver_names, solver_specs
 
     registered = solver_names()
     if experiments in ("all", None):

@@ -28,11 +28,11 @@ import numpy as np
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch, anchor_node, deadline_after, is_past
 
-from gtsp_bench.checks import check_float, check_int, default_time_limit
+from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution, check_time_limit
+from gtsp_bench.registry import Solution
 
 REMOVALS = ("random", "worst", "segment")
 INSERTIONS = ("cheapest", "randomised")

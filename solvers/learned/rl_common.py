@@ -31,8 +31,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from gtsp_bench.checks import check_int
-from gtsp_bench.energy import check_omega, cluster_ground_energy
+from gtsp_bench.checks import check_int, check_omega
+from gtsp_bench.energy import cluster_ground_energy
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import atomic_write_bytes

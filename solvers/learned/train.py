@@ -47,8 +47,7 @@ from gtsp_bench.solvers.learned.rl_common import (
 )
 from torch import nn
 
-from gtsp_bench.checks import check_float, check_int
-from gtsp_bench.energy import check_omega
+from gtsp_bench.checks import check_float, check_int, check_omega
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import check_generator_args, generate_batch
 from gtsp_bench.io import atomic_write_bytes, atomic_write_text

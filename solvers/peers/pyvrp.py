@@ -22,11 +22,11 @@ import time
 
 import numpy as np
 
-from gtsp_bench.checks import check_float, check_int, default_time_limit
+from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution, check_time_limit
+from gtsp_bench.registry import Solution
 
 #: Integer scale target: the largest folded edge cost becomes about this many units.
 RESOLUTION = 1e7
