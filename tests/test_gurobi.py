@@ -10,7 +10,6 @@ from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.io import write_instance
-from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
 
 from .test_milp import _instance
@@ -57,19 +56,3 @@ def test_without_gurobipy_the_error_is_clear(monkeypatch, tmp_path, capsys):
     write_instance(generate_instance(3, 3, seed=0), path)
     assert main(["solve", str(path), "--solver", "gurobi"]) == 2
     assert "needs gurobipy" in capsys.readouterr().err
-
-
-def test_time_already_up_stops_instead_of_raising():
-    """The solve passes the seconds left, which can be just below 0 by the time Gurobi is called:
-    that is a stop (no answer), not a GurobiError about a negative TimeLimit."""
-    pytest.importorskip("gurobipy")
-    from gtsp_bench.solvers.exact import gtsp_mip as gm
-    from gtsp_bench.solvers.exact.gurobi import GurobiBackend
-
-    problem = price(generate_instance(6, 4, seed=2), 0.5)
-    model = gm.build_model(problem, problem.clusters)
-    tour = gm.upper_bound_tour(problem, 0, 0, None)
-    lp = gm._Lp(model, GurobiBackend(gm.MipOptions()), gm.core_columns(model, 3, tour))
-    assert lp.backend.solve_lp(-0.01).status == "stopped"
-    res = lp.backend.solve_mip(-0.01, problem.tour_cost(tour), 1e-6, lambda v: None)
-    assert res.values is None and not res.complete

@@ -8,8 +8,7 @@ import sys
 
 import numpy as np
 import pytest
-from gtsp_bench.solvers.exact import gtsp_mip as gm
-from gtsp_bench.solvers.exact.milp import HighsBackend, Milp
+from gtsp_bench.solvers.exact.milp import Milp
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -17,7 +16,6 @@ from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import read_instance
-from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
 
 from .conftest import GTSPLIB, REPO
@@ -114,41 +112,6 @@ def test_time_limit_gives_tour_and_bound(time_limit):
     assert r.runtime_s < time_limit + 4.0
 
 
-@pytest.mark.parametrize("seed", range(12))
-@pytest.mark.parametrize("depot", [True, False])
-def test_degree_bound_is_below_the_optimum(seed, depot):
-    """The LP-free bound reported when time runs out first never exceeds the brute-force optimum."""
-    rng = np.random.default_rng(seed)
-    k = int(rng.integers(3 if depot else 4, 6))
-    inst = _instance(seed, k, rng.integers(1, 5, size=k).tolist(), depot)
-    omega = float(rng.choice([0.0, 1.0, rng.uniform()]))
-    bound = gm.degree_bound(price(inst, omega))
-    assert 0 < bound <= run_solver("brute", inst, omega).objective * (1 + 1e-12)
-
-
-def test_degree_bound_on_gtsplib():
-    """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
-    bound = gm.degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
-    assert 0.5 * 4040 < bound <= 4040
-
-
-def test_reduced_costs_match_highs():
-    """The reduced costs computed from row duals (used for pricing) equal HiGHS's own."""
-    problem = price(generate_instance(6, 4, seed=2), 0.5)
-    model = gm.build_model(problem, problem.clusters)
-    tour = gm.upper_bound_tour(problem, 0, 0, None)  # its edges keep the core LP feasible
-    lp = gm._Lp(model, HighsBackend(gm.MipOptions()), gm.core_columns(model, 3, tour))
-    for _ in range(4):  # a few rounds with cuts
-        res = lp.backend.solve_lp(60.0)
-        assert res.status == "optimal"
-        ours = lp.reduced_costs(res.duals, lp.cols)
-        np.testing.assert_allclose(ours, res.reduced_costs, atol=1e-7)
-        cuts = gm.separate(model, lp.full(res.values))
-        if cuts is None:
-            break
-        lp.add_cuts(cuts)
-
-
 def test_bad_options_and_input_are_refused():
     """Options are checked when the solver is built; an asymmetric matrix is refused."""
     with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):
@@ -165,6 +128,7 @@ def test_bad_options_and_input_are_refused():
 def test_importing_milp_does_not_import_highspy():
     """highspy is imported when solving only (it cannot share a process with ortools)."""
     code = ("import sys, gtsp_bench.solvers.exact.milp, gtsp_bench.solvers.exact.gurobi; "
+            "from gtsp_bench.solvers.exact.mip import backends, branch_cut, model, options, separation; "
             "print('highspy' in sys.modules, 'gurobipy' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                          check=True).stdout

@@ -1,0 +1,60 @@
+"""The exact solvers' GTSP MILP, written once for every LP/MIP library.
+
+Formulation over the candidate heads left by :func:`gtsp_bench.solvers.exact.prune.prune_heads`
+(node ``i`` in GTSP cluster ``c(i)``; the depot, when there is one, is a cluster of one node):
+
+* ``y_i`` in {0, 1}: node ``i`` is its cluster's head; ``x_e`` in {0, 1} for every edge
+  ``e = {i, j}`` with ``c(i) != c(j)`` (symmetric: one variable per edge);
+* minimise ``sum_i node_cost_i y_i + sum_e edge_cost_e x_e``;
+* ``Cluster(C)``: ``y(C) = 1`` for every cluster;
+* ``Degree(i)``: ``x(delta(i)) = 2 y_i``;
+* ``Subtour(S, C)``, added as cuts: ``x(delta(S)) >= 2 y(S & C)`` for a node set ``S`` that
+  misses a whole cluster and any cluster ``C``. With the degree rows it is written over the edges
+  inside the smaller of the two sides (fewer nonzeros): ``x(E(S)) <= y(S - C)`` or
+  ``x(E(T)) <= y(T) + y(T & C) - 1`` with ``T = V - S``. Every cut is thus
+  ``x(E(side)) + sum_i a_i y_i <= b``: a :class:`~gtsp_bench.solvers.exact.mip.separation.Cuts`
+  block stores ``side``, ``a`` and ``b``.
+
+A tour through three or fewer clusters needs no model: one cyclic order exists, and
+:func:`gtsp_bench.solvers.heads.optimal_heads` gives its optimal heads (one cluster: a single
+node; two: an edge used twice).
+
+:func:`~gtsp_bench.solvers.exact.mip.branch_cut.solve_exact` runs the method on any
+:class:`~gtsp_bench.solvers.exact.mip.backends.Backend` (a thin LP/MIP wrapper that knows nothing
+of the GTSP):
+
+1. an upper bound from the large neighbourhood search
+   :class:`gtsp_bench.solvers.heuristics.lns.Lns` (one trial);
+2. exact pruning of candidate heads;
+3. a root loop on the LP relaxation over a core of cheap edges: columns of negative reduced cost
+   are priced in, columns whose reduced cost exceeds the gap to the upper bound are fixed to 0,
+   and violated cuts are separated at the fractional solution: node-cluster rows
+   ``x(i : D) <= y_i`` by enumeration, lifted subtour cuts by one max-flow per cluster, and
+   blossoms of the tour over the clusters by the odd-component heuristic; slack cuts are purged;
+4. unless the root proved the upper bound optimal, branch and cut with the backend as LP solver:
+   best first with diving, the same cuts, pricing and reduced-cost fixing at every node,
+   branching on ``y`` first. A backend with lazy constraints (Gurobi) solves the MILP itself
+   instead, over every column not fixed, adding subtour rows from a callback.
+
+Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20
+instance whose root gap stayed open, HiGHS spent 110 s on 3 nodes without finishing (it can
+neither separate subtours inside its search nor take lazy rows in highspy 1.15.1), where the
+branch and cut here proves it in about 20 s.
+
+Modules, each importing only the ones above it:
+
+* :mod:`~gtsp_bench.solvers.exact.mip.options`: :class:`MipOptions` (the solvers' shared options)
+  and the upper-bound tour;
+* :mod:`~gtsp_bench.solvers.exact.mip.model`: the numerical tolerances, :class:`GtspModel` (columns,
+  base rows, cycles and tour of an integer point), :func:`build_model`, the core columns;
+* :mod:`~gtsp_bench.solvers.exact.mip.separation`: :class:`Cuts` and the separators (subtour
+  rows of an integer point, lifted subtour cuts by max-flow, node-cluster rows, blossoms,
+  :func:`separate`);
+* :mod:`~gtsp_bench.solvers.exact.mip.backends`: LP/MIP results, the ``Backend`` and
+  ``LazyMipBackend`` protocols, :class:`LpModel` (the model held in a backend) and the HiGHS and
+  Gurobi backends (highspy and gurobipy are imported when a backend is built, never on import);
+* :mod:`~gtsp_bench.solvers.exact.mip.branch_cut`: the search (root loop, own branch and cut,
+  the backend's lazy MILP), :func:`solve_exact` and :class:`MipSolver`, the base of the ``milp``
+  and ``gurobi`` solvers (:mod:`gtsp_bench.solvers.exact.milp`,
+  :mod:`gtsp_bench.solvers.exact.gurobi`).
+"""

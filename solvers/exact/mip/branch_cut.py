@@ -1,0 +1,429 @@
+"""The exact search: root loop, branch and cut (or the backend's own MILP), and the solver base.
+
+:func:`solve_exact` takes an upper bound from the large neighbourhood search, prunes candidate
+heads, runs the root LP loop (pricing, reduced-cost fixing, separation, purging) and, unless the
+root proved the upper bound optimal, either branches itself with the backend as LP solver or,
+for a :class:`~gtsp_bench.solvers.exact.mip.backends.LazyMipBackend`, lets the backend solve the
+MILP with lazy subtour rows. :class:`MipSolver` is the base of the ``milp`` and ``gurobi``
+solvers.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
+from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
+from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
+from gtsp_bench.solvers.exact.prune import prune_heads
+from gtsp_bench.solvers.heads import optimal_heads
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
+from gtsp_bench.registry import Solution
+
+#: Columns priced into the root LP per round, per node.
+PRICE_PER_NODE = 2
+
+
+# ---------------------------------------------------------------------- the method
+def _is_integral(values: np.ndarray, tol: float = 1e-6) -> bool:
+    return bool(np.all(np.abs(values - np.round(values)) <= tol))
+
+
+def check_symmetric(problem: Problem) -> None:
+    """Raise :class:`InputError` unless the edge costs are symmetric (the model assumes it)."""
+    if not np.allclose(problem.edge_cost, problem.edge_cost.T, rtol=1e-12, atol=0):
+        raise InputError(f"{problem.instance.name}: edge costs are not symmetric; the exact "
+                         "solvers need a symmetric GTSP")
+
+
+def degree_bound(problem: Problem) -> float:
+    """A lower bound on the optimum that needs no LP, for cycles through at least 3 clusters.
+
+    In such a cycle every head ``v`` has two different neighbours outside its cluster, so with
+    symmetric costs the tour costs ``sum over heads of node[v] + (e(prev, v) + e(v, next)) / 2``,
+    at least ``node[v]`` plus half of ``v``'s two cheapest edges to other clusters; the bound
+    takes the cheapest node of each cluster by that measure. It is what a solve stopped by its
+    time limit before the first LP reports.
+    """
+    cluster_of = problem.cluster_of
+    other = np.where(cluster_of[:, None] != cluster_of[None, :], problem.edge_cost, np.inf)
+    per_node = problem.node_cost + 0.5 * np.partition(other, 1, axis=1)[:, :2].sum(axis=1)
+    return float(sum(per_node[c].min() for c in problem.clusters))
+
+
+class _Timer:
+    """Accumulates seconds per phase in a stats dict."""
+
+    def __init__(self, stats: dict[str, Any], key: str) -> None:
+        self.stats, self.key = stats, key
+
+    def __enter__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stats[self.key] = self.stats.get(self.key, 0.0) + time.perf_counter() - self.start
+
+
+def _padded(fixes: np.ndarray, n: int) -> np.ndarray:
+    """Node column codes for ``n`` columns: columns added since the node was made are free."""
+    if len(fixes) == n:
+        return fixes
+    return np.concatenate([fixes, np.full(n - len(fixes), -1, dtype=np.int8)])
+
+
+@dataclass(order=True)
+class _Node:
+    """An open branch-and-cut node: its parent's bound and, per backend column, -1 (free) or
+    the value it is fixed to."""
+
+    bound: float
+    seq: int
+    fixes: np.ndarray = field(compare=False)
+
+
+class _Search:
+    """State of one exact solve: the incumbent, the bound, the LP and the phases."""
+
+    def __init__(self, problem: Problem, backend: Backend, options: MipOptions, deadline: float,
+                 tour: np.ndarray, kept: Sequence[np.ndarray], stats: dict[str, Any]) -> None:
+        self.problem, self.options, self.deadline, self.stats = problem, options, deadline, stats
+        self.model = model = build_model(problem, kept)
+        stats["nodes"], stats["edges"] = model.n_nodes, len(model.tail)
+        self.tour, self.ub = tour, problem.tour_cost(tour)
+        self.lb = degree_bound(problem)  # a bound even if no LP is solved in time
+        self.gap = max(options.abs_gap, 1 - 1e-6) if model.integral_costs else options.abs_gap
+        self.margin = 1e-9 * max(1.0, abs(self.ub))  # against rounding in the LP's duals
+        self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
+        self.fixed = np.zeros(model.n_cols, dtype=bool)
+
+    # -------------------------------------------------------------- helpers
+    def left(self) -> float:
+        """Seconds left."""
+        return self.deadline - time.perf_counter()
+
+    @property
+    def proven(self) -> bool:
+        """Whether the incumbent is proven optimal (up to the gap and rounding)."""
+        return self.ub - self.lb <= self.gap + 8 * np.finfo(float).eps * abs(self.ub)
+
+    def offer(self, values: np.ndarray) -> None:
+        """Take an integer solution without subtours as incumbent if it is better."""
+        cand = self.model.tour(values)
+        cost = self.problem.tour_cost(cand)
+        if cost < self.ub:
+            self.tour, self.ub = cand, cost
+
+    def solve_lp(self, cutoff: float = math.inf) -> LpResult:
+        """One LP solve, timed."""
+        with _Timer(self.stats, "lp_s"):
+            return self.lp.backend.solve_lp(self.left(), cutoff)
+
+    def separate(self, values: np.ndarray, thorough: bool = True) -> Cuts | None:
+        """Cuts at ``values``: subtour rows of an integer point, else the fractional separation."""
+        with _Timer(self.stats, "separation_s"):
+            if _is_integral(values):
+                return subtour_cuts(self.model, values)
+            return separate(self.model, values, thorough=thorough)
+
+    # -------------------------------------------------------------- root
+    def root(self) -> None:
+        """Root LP loop: price columns in, bound, fix by reduced cost, separate."""
+        model, lp = self.model, self.lp
+        history: list[float] = []
+        rounds = 0
+        while rounds < self.options.root_rounds and self.left() > 0:
+            rounds += 1
+            res = self.solve_lp()
+            present = np.zeros(model.n_cols, dtype=bool)
+            present[lp.cols] = True
+            absent = ~present & ~self.fixed
+            if res.status == "infeasible" and absent.any():  # the core was too small
+                lp.add_cols(np.flatnonzero(absent))
+                continue
+            if res.values is None or res.duals is None or res.reduced_costs is None:
+                break
+            values = lp.full(res.values)
+            rc = np.zeros(model.n_cols)
+            rc[lp.cols] = res.reduced_costs
+            rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
+            bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
+            self.lb = max(self.lb, bound)
+            if self.proven:
+                break
+            fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
+            if fix.any():
+                self.fixed |= fix
+                lp.fix_zero(np.flatnonzero(fix[lp.cols]))
+            price = np.flatnonzero(absent & ~fix & (rc < -TOL))
+            if len(price):  # the most negative columns join; cuts are separated meanwhile
+                lp.add_cols(price[np.argsort(rc[price])[:PRICE_PER_NODE * model.n_nodes]])
+            else:
+                history.append(res.objective)
+                if len(history) > 5 and history[-1] - history[-6] < 1e-5 * max(1.0, abs(history[-1])):
+                    break  # tailing off
+            new = self.separate(values)
+            if new is None:
+                if not len(price):
+                    if _is_integral(values):
+                        self.offer(values)  # the LP optimum is a tour: the optimum
+                    break
+                continue
+            lp.purge(values, 3)
+            lp.add_cuts(new)
+        self.stats["root_rounds"], self.stats["root_bound"] = rounds, float(self.lb)
+        self.stats["root_cuts"] = len(lp.cuts)
+
+    def absent(self) -> np.ndarray:
+        """Model columns neither in the LP nor fixed to 0."""
+        absent = ~self.fixed
+        absent[self.lp.cols] = False
+        return np.flatnonzero(absent)
+
+    # -------------------------------------------------------------- MILP by the backend
+    def native_mip(self) -> None:
+        """The backend's own branch and cut, subtour rows added lazily."""
+        model, lp = self.model, self.lp
+        missing = self.absent()  # every column not fixed joins: the search is exact
+        if len(missing):
+            lp.add_cols(missing)
+
+        def lazy(v: np.ndarray) -> tuple[sp.csr_array, np.ndarray] | None:
+            cuts = subtour_cuts(model, lp.full(v))
+            if cuts is None:
+                return None
+            return sp.csr_array(cuts.matrix(model, lp.cols)), cuts.rhs
+
+        backend = lp.backend
+        assert isinstance(backend, LazyMipBackend)
+        with _Timer(self.stats, "mip_s"):
+            res = backend.solve_mip(self.left(), self.ub - self.gap, self.gap, lazy)
+        self.stats.update(res.stats)
+        self.lb = max(self.lb, min(res.bound, self.ub))
+        if res.values is not None:
+            self.offer(lp.full(res.values))
+        if res.complete:
+            self.lb = max(self.lb, self.ub - self.gap)  # nothing better than ub - gap exists
+
+    # -------------------------------------------------------------- own branch and cut
+    def branch_and_cut(self) -> None:
+        """Branch and cut with the backend as LP solver: best first, diving into a child.
+
+        Each node runs the root's cut loop; columns not in the LP are priced in while their
+        reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
+        fixes columns by reduced cost for its subtree and branches on the fractional ``y``
+        closest to 1/2 (``y = 1`` fixes a cluster's head), else on such an ``x``. Cuts are
+        global; slack ones are purged.
+        """
+        lp = self.lp
+        heap: list[_Node] = []
+        free = np.full(len(lp.cols), -1, dtype=np.int8)
+        node: _Node | None = _Node(self.lb, 0, free)
+        applied = free
+        seq = explored = 0
+        while node is not None and not self.proven and self.left() > 0:
+            if node.bound <= self.ub - self.gap:
+                # move the LP's bounds here (columns priced in later are free in older nodes)
+                fixes, applied = _padded(node.fixes, len(lp.cols)), _padded(applied, len(lp.cols))
+                change = np.flatnonzero(fixes != applied)
+                if len(change):
+                    code = fixes[change]
+                    upper0 = np.where(self.fixed[lp.cols[change]], 0.0, 1.0)
+                    lp.backend.set_bounds(change, np.maximum(code, 0).astype(float),
+                                          np.where(code < 0, upper0, code).astype(float))
+                applied = fixes
+                explored += 1
+                outcome = self._node_loop()
+                if outcome == "stopped":
+                    heapq.heappush(heap, node)
+                    break
+                node = None
+                if isinstance(outcome, tuple):
+                    bound, col, value, fix = outcome
+                    base = _padded(applied, len(lp.cols))
+                    base[fix] = 0
+                    first, second = (1, 0) if value >= 0.5 else (0, 1)
+                    children = []
+                    for v in (first, second):
+                        child = base.copy()
+                        child[col] = v
+                        children.append(child)
+                    seq += 2
+                    heapq.heappush(heap, _Node(bound, seq, children[1]))
+                    node = _Node(bound, seq - 1, children[0])  # dive
+            else:
+                node = None
+            if node is None and heap:
+                node = heapq.heappop(heap)
+            # the global bound: the best open node (the incumbent's when none is open)
+            best_open = min(heap[0].bound if heap else math.inf,
+                            node.bound if node is not None else math.inf)
+            self.lb = max(self.lb, min(best_open, self.ub - self.gap))
+        self.stats["bc_nodes"] = explored
+
+    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | str | None:
+        """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit, else
+        (bound, backend column and its value to branch on, backend columns fixed by reduced
+        cost in the subtree)."""
+        lp = self.lp
+        history: list[float] = []
+        while self.left() > 0:
+            absent = self.absent()
+            # with columns absent, only the Lagrangian bound (below) may prune: no LP cutoff
+            res = self.solve_lp(cutoff=self.ub - self.gap if len(absent) == 0 else math.inf)
+            if res.status in ("infeasible", "cutoff"):
+                return None
+            if res.values is None or res.reduced_costs is None or res.duals is None:
+                return "stopped"
+            values = lp.full(res.values)
+            if len(absent):
+                rc = lp.reduced_costs(res.duals, absent)
+                if res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap:
+                    return None
+                price = rc < -TOL
+                if price.any():
+                    if _is_integral(values) and subtour_cuts(self.model, values) is None:
+                        self.offer(values)
+                    lp.add_cols(absent[price][np.argsort(rc[price])[:PRICE_PER_NODE * self.model.n_nodes]])
+                    continue
+            if res.objective > self.ub - self.gap:
+                return None
+            history.append(res.objective)
+            tailing = len(history) > 3 and history[-1] - history[-4] < 1e-4 * max(1.0, abs(history[-1]))
+            new = None if tailing and not _is_integral(values) else self.separate(values, False)
+            if new is None:
+                if _is_integral(values):
+                    self.offer(values)
+                    return None
+                rc = res.reduced_costs
+                fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
+                                     & (res.values < TOL))
+                return res.objective, *self._branching(res.values), fix
+            lp.purge(values, 10)
+            lp.add_cuts(new)
+        return "stopped"
+
+    def _branching(self, values: np.ndarray) -> tuple[int, float]:
+        """Backend column to branch on and its value: the fractional y closest to 1/2, else x."""
+        is_y = self.lp.cols < self.model.n_nodes
+        frac = np.abs(values - np.round(values)) > 1e-6
+        for group in (is_y, ~is_y):
+            cand = np.flatnonzero(group & frac)
+            if len(cand):
+                col = int(cand[np.argmin(np.abs(values[cand] - 0.5))])
+                return col, float(values[col])
+        raise AssertionError("no fractional column to branch on")
+
+
+def solve_exact(
+    problem: Problem,
+    make_backend: Callable[[MipOptions], Backend],
+    options: MipOptions,
+    *,
+    time_limit: float | None = None,
+    seed: int = 0,
+) -> Solution:
+    """Solve a priced GTSP to proven optimality (or until ``time_limit`` seconds).
+
+    Parameters
+    ----------
+    problem
+        The priced problem (symmetric edge costs).
+    make_backend
+        Builds an empty backend.
+    options
+        Shared options.
+    time_limit
+        Seconds for the whole solve (``None``: no limit).
+    seed
+        Seed of the upper-bound heuristic.
+
+    Returns
+    -------
+    Solution
+        Status ``"optimal"`` with ``lower_bound`` when proven, else ``"time_limit"`` with the best
+        tour and the best lower bound known (at least :func:`degree_bound`). ``stats`` has seconds per
+        phase, rounds, cuts and backend counters.
+    """
+    check_symmetric(problem)
+    start = time.perf_counter()
+    deadline = math.inf if time_limit is None else start + time_limit
+    stats: dict[str, Any] = {}
+
+    def result(tour: np.ndarray, status: str, lower: float) -> Solution:
+        order, heads = problem.to_solution(tour)
+        cost = problem.tour_cost(tour)
+        stats["total_s"] = time.perf_counter() - start
+        # reduced-cost fixing drops solutions no better than the incumbent, so a bound above
+        # the incumbent's cost only says that it is optimal
+        bound = None if lower == -math.inf else min(float(lower), cost)
+        return Solution(order, heads, objective=cost, status=status, lower_bound=bound, stats=stats)
+
+    if problem.n_clusters <= 3:  # one cyclic order: its optimal heads are the optimum
+        tour, cost = optimal_heads(problem, list(range(problem.instance.n_clusters)))
+        return result(tour, "optimal", cost)
+    with _Timer(stats, "heuristic_s"):
+        tour = upper_bound_tour(problem, options.lns_trials, seed,
+                                None if time_limit is None else 0.25 * time_limit)
+    with _Timer(stats, "prune_s"):
+        kept = prune_heads(problem, deadline=deadline) if options.prune else problem.clusters
+    search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
+    search.root()
+    if not search.proven and search.left() > 0:
+        if isinstance(search.lp.backend, LazyMipBackend):
+            search.native_mip()
+        else:
+            search.branch_and_cut()
+    stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
+    lower = search.lb
+    if search.model.integral_costs and math.isfinite(lower):
+        lower = math.ceil(lower - 1e-7)  # every tour costs an integer
+    return result(search.tour, "optimal" if search.proven else "time_limit", lower)
+
+
+class MipSolver:
+    """The exact MILP solver on one backend; subclasses name the backend (``milp``, ``gurobi``).
+
+    Parameters
+    ----------
+    prune
+        Remove dominated candidate heads first (exact).
+    lns_trials
+        Trials of the large neighbourhood search giving the first upper bound (0: greedy and
+        local search only).
+    root_rounds
+        Most rounds of the root LP loop (0: no root cuts).
+    core_edges
+        Cheapest edges per node in the first LP (0: all edges).
+    abs_gap
+        Absolute gap under which the optimum counts as proven.
+    verbose
+        Print the backend's log.
+    """
+
+    def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
+                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
+        self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
+                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
+
+    def backend(self, options: MipOptions) -> Backend:
+        """A new, empty backend."""
+        raise NotImplementedError
+
+    def solve(
+        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
+        seed: int = 0,
+    ) -> Solution:
+        """Solve to proven optimality, or return the best tour and bound at ``time_limit``."""
+        return solve_exact(price(instance, omega), self.backend, self.options,
+                           time_limit=time_limit, seed=seed)

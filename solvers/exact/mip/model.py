@@ -1,0 +1,160 @@
+"""The GTSP MILP over the kept candidate heads: columns, base rows, integer points, core columns.
+
+Column ``i < n_nodes`` is ``y_i`` (local node ``i`` is its cluster's head); column
+``n_nodes + e`` is ``x_e`` of edge ``e = (tail[e], head[e])`` between two clusters. The base rows
+are ``Cluster(C)``: ``y(C) = 1`` and ``Degree(i)``: ``x(delta(i)) = 2 y_i``; cuts live in
+:mod:`gtsp_bench.solvers.exact.mip.separation`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from gtsp_bench.problem import Problem
+
+#: Values above this count as 1 in an integer solution.
+HALF = 0.5
+#: Values above this are in the support graph.
+ZERO = 1e-9
+#: A cut is added only when violated by more than this; a column priced in below -this.
+TOL = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class GtspModel:
+    """The MILP over the kept candidate heads.
+
+    Column ``i < n_nodes`` is ``y`` of local node ``i``; column ``n_nodes + e`` is ``x`` of edge
+    ``e = (tail[e], head[e])``.
+
+    Attributes
+    ----------
+    problem
+        The priced problem.
+    nodes
+        Problem node id of each local node.
+    cluster
+        GTSP cluster of each local node (nondecreasing).
+    tail, head
+        Local end nodes of each edge (different clusters, ``tail < head``).
+    cost
+        Objective coefficient of each column.
+    """
+
+    problem: Problem
+    nodes: np.ndarray
+    cluster: np.ndarray
+    tail: np.ndarray
+    head: np.ndarray
+    cost: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of y columns."""
+        return len(self.nodes)
+
+    @property
+    def n_clusters(self) -> int:
+        """Number of GTSP clusters (the depot's included)."""
+        return int(self.cluster[-1]) + 1
+
+    @property
+    def n_cols(self) -> int:
+        """Number of columns (y and x)."""
+        return len(self.cost)
+
+    @property
+    def n_base_rows(self) -> int:
+        """Number of ``Cluster`` and ``Degree`` rows."""
+        return self.n_clusters + self.n_nodes
+
+    @property
+    def integral_costs(self) -> bool:
+        """Whether every cost is an integer (then a gap below 1 proves optimality)."""
+        return bool(np.all(self.cost == np.round(self.cost)))
+
+    def split(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(y, x)`` parts of a column vector."""
+        return values[:self.n_nodes], values[self.n_nodes:]
+
+    def base_rows(self, cols: np.ndarray) -> tuple[sp.csc_array, np.ndarray]:
+        """``Cluster(C)`` then ``Degree(i)`` rows over columns ``cols``: (matrix, right-hand side).
+
+        Both families are equalities.
+        """
+        n, m = self.n_nodes, self.n_clusters
+        is_y = cols < n
+        ys, es = cols[is_y], cols[~is_y] - n
+        pos = np.arange(len(cols))
+        row = np.concatenate([self.cluster[ys], m + ys, m + self.tail[es], m + self.head[es]])
+        col = np.concatenate([pos[is_y], pos[is_y], pos[~is_y], pos[~is_y]])
+        val = np.concatenate([np.ones(len(ys)), np.full(len(ys), -2.0), np.ones(2 * len(es))])
+        matrix = sp.csc_array((val, (row, col)), shape=(m + n, len(cols)))
+        return matrix, np.concatenate([np.ones(m), np.zeros(n)])
+
+    def components(self, values: np.ndarray) -> list[np.ndarray]:
+        """Local nodes of each cycle of an integer solution."""
+        y, x = self.split(values)
+        used = x > HALF
+        graph = sp.coo_array((np.ones(int(used.sum())), (self.tail[used], self.head[used])),
+                             shape=(self.n_nodes, self.n_nodes))
+        _, label = connected_components(graph, directed=False)
+        chosen = np.flatnonzero(y > HALF)
+        return [chosen[label[chosen] == c] for c in np.unique(label[chosen])]
+
+    def tour(self, values: np.ndarray) -> np.ndarray:
+        """Problem node ids of the tour of an integer solution without subtours."""
+        y, x = self.split(values)
+        neighbours: dict[int, list[int]] = {}
+        for e in np.flatnonzero(x > HALF):
+            a, b = int(self.tail[e]), int(self.head[e])
+            neighbours.setdefault(a, []).append(b)
+            neighbours.setdefault(b, []).append(a)
+        start = int(np.flatnonzero(y > HALF)[0])
+        path, prev, cur = [start], -1, start
+        while True:
+            nxt = next(v for v in neighbours[cur] if v != prev)
+            if nxt == start:
+                return self.nodes[np.array(path)]
+            path.append(nxt)
+            prev, cur = cur, nxt
+
+
+def build_model(problem: Problem, kept: Sequence[np.ndarray]) -> GtspModel:
+    """The MILP over candidate heads ``kept`` (node ids per GTSP cluster, in cluster order)."""
+    nodes = np.concatenate([np.asarray(k, dtype=np.int64) for k in kept])
+    cluster = np.repeat(np.arange(len(kept)), [len(k) for k in kept])
+    tail, head = np.triu_indices(len(nodes), 1)
+    between = cluster[tail] != cluster[head]
+    tail, head = tail[between].astype(np.int64), head[between].astype(np.int64)
+    cost = np.concatenate([problem.node_cost[nodes], problem.edge_cost[nodes[tail], nodes[head]]])
+    return GtspModel(problem, nodes, cluster, tail, head, cost)
+
+
+def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np.ndarray:
+    """All y columns, each node's ``per_node`` cheapest edges and the edges of ``tour``."""
+    n = model.n_nodes
+    if per_node == 0:
+        return np.arange(model.n_cols)
+    e = np.arange(len(model.tail))
+    ends = np.concatenate([model.tail, model.head])
+    order = np.lexsort((np.concatenate([model.cost[n:], model.cost[n:]]), ends))
+    rank = np.empty(len(order), dtype=np.int64)
+    start = np.searchsorted(ends[order], np.arange(n))
+    rank[order] = np.arange(len(order)) - np.repeat(start, np.bincount(ends, minlength=n))
+    keep = np.zeros(len(e), dtype=bool)
+    keep[np.concatenate([e, e])[rank < per_node]] = True
+    if tour is not None:
+        local = np.full(model.problem.n_nodes, -1)
+        local[model.nodes] = np.arange(n)
+        t = local[tour]
+        if np.all(t >= 0):  # (the tour may use pruned nodes)
+            a, b = np.minimum(t, np.roll(t, -1)), np.maximum(t, np.roll(t, -1))
+            keys = model.tail * n + model.head  # sorted: edges come in (tail, head) order
+            keep[np.searchsorted(keys, a * n + b)] = True
+    return np.concatenate([np.arange(n), n + np.flatnonzero(keep)])

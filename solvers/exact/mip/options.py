@@ -1,0 +1,61 @@
+"""Options shared by the MILP solvers, and the tour giving the first upper bound."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.lns import Lns
+from gtsp_bench.solvers.heuristics.local_search import anchor_node, improve
+
+from gtsp_bench.checks import check_bool, check_float, check_int
+from gtsp_bench.problem import Problem
+
+
+@dataclass(frozen=True)
+class MipOptions:
+    """Options shared by the MILP solvers (each a constructor keyword of the solvers).
+
+    Attributes
+    ----------
+    prune
+        Remove candidate heads by exact pair dominance first.
+    lns_trials
+        Trials of the large neighbourhood search giving the first upper bound (0: the greedy
+        tour after local search only).
+    root_rounds
+        Most rounds of the root LP loop (0: no root cuts, all edges).
+    core_edges
+        Edges per node in the first LP (its cheapest); the others are priced in as needed.
+        0: all edges from the start.
+    abs_gap
+        The optimum counts as proven when upper - lower bound <= abs_gap (with all costs integer,
+        a gap below 1 proves it too).
+    verbose
+        Print the backend's log.
+    """
+
+    prune: bool = True
+    lns_trials: int = 1
+    root_rounds: int = 200
+    core_edges: int = 10
+    abs_gap: float = 1e-6
+    verbose: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("prune", "verbose"):
+            check_bool(name, getattr(self, name))
+        for name in ("lns_trials", "root_rounds", "core_edges"):
+            check_int(name, getattr(self, name), 0)
+        check_float("abs_gap", self.abs_gap, 0.0, math.inf, open_low=False)
+
+
+def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None) -> np.ndarray:
+    """A good tour: :class:`gtsp_bench.solvers.heuristics.lns.Lns` with ``trials`` trials
+    (0: greedy + local search)."""
+    if trials == 0:
+        return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
+    sol = Lns(trials=trials).solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
+    return problem.to_tour(sol.order, sol.heads)

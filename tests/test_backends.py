@@ -1,0 +1,86 @@
+"""Backends: the model held in HiGHS (reduced costs, purged cuts), Gurobi's stop at no time left."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.exact.mip.backends import GurobiBackend, HighsBackend, LpModel
+from gtsp_bench.solvers.exact.mip.model import build_model, core_columns
+from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.separation import separate
+
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.problem import price
+
+
+def _lp(backend_class, seed: int = 2) -> tuple[LpModel, float]:
+    """A K = 6 model in a new backend, over a core that holds a tour's edges; the tour's cost."""
+    problem = price(generate_instance(6, 4, seed=seed), 0.5)
+    model = build_model(problem, problem.clusters)
+    tour = upper_bound_tour(problem, 0, 0, None)  # its edges keep the core LP feasible
+    return LpModel(model, backend_class(MipOptions()), core_columns(model, 3, tour)), problem.tour_cost(tour)
+
+
+def test_reduced_costs_match_highs():
+    """The reduced costs computed from row duals (used for pricing) equal HiGHS's own."""
+    lp, _ = _lp(HighsBackend)
+    model = lp.model
+    for _ in range(4):  # a few rounds with cuts
+        res = lp.backend.solve_lp(60.0)
+        assert res.status == "optimal"
+        ours = lp.reduced_costs(res.duals, lp.cols)
+        np.testing.assert_allclose(ours, res.reduced_costs, atol=1e-7)
+        cuts = separate(model, lp.full(res.values))
+        if cuts is None:
+            break
+        lp.add_cuts(cuts)
+
+
+def test_purge_keeps_the_backend_rows_in_step_with_the_cuts():
+    """After purging slack cuts, HiGHS holds the base rows and exactly the cuts kept: its LP
+    equals that of a new backend given those cuts."""
+    lp, _ = _lp(HighsBackend, seed=3)
+    model = lp.model
+    purged = 0
+    for _ in range(6):
+        res = lp.backend.solve_lp(60.0)
+        cuts = separate(model, lp.full(res.values))
+        if cuts is None:
+            break
+        before = len(lp.cuts)
+        lp.purge(lp.full(res.values), 1)
+        purged += before - len(lp.cuts)
+        lp.add_cuts(cuts)
+    assert purged > 0
+    assert lp.backend.h.getNumRow() == model.n_base_rows + len(lp.cuts)
+    fresh = LpModel(model, HighsBackend(MipOptions()), lp.cols)
+    fresh.add_cuts(lp.cuts)
+    np.testing.assert_allclose(lp.backend.solve_lp(60.0).objective, fresh.backend.solve_lp(60.0).objective,
+                               rtol=1e-9)
+
+
+def test_highs_and_gurobi_agree_on_the_lp():
+    """The same model and cuts in both backends: the same LP optimum."""
+    pytest.importorskip("gurobipy")
+    highs, _ = _lp(HighsBackend)
+    gurobi, _ = _lp(GurobiBackend)
+    for _ in range(3):
+        res = highs.backend.solve_lp(60.0)
+        other = gurobi.backend.solve_lp(60.0)
+        assert res.status == other.status == "optimal"
+        assert other.objective == pytest.approx(res.objective, rel=1e-7)
+        cuts = separate(highs.model, highs.full(res.values))
+        if cuts is None:
+            break
+        highs.add_cuts(cuts)
+        gurobi.add_cuts(cuts)
+
+
+def test_time_already_up_stops_instead_of_raising():
+    """The solve passes the seconds left, which can be just below 0 by the time Gurobi is called:
+    that is a stop (no answer), not a GurobiError about a negative TimeLimit."""
+    pytest.importorskip("gurobipy")
+    lp, tour_cost = _lp(GurobiBackend)
+    assert lp.backend.solve_lp(-0.01).status == "stopped"
+    res = lp.backend.solve_mip(-0.01, tour_cost, 1e-6, lambda v: None)
+    assert res.values is None and not res.complete

@@ -1,0 +1,72 @@
+"""The search: input check, the LP-free bound, the no-model path, the solvers' shared options."""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.exact.gurobi import Gurobi
+from gtsp_bench.solvers.exact.milp import Milp
+from gtsp_bench.solvers.exact.mip.branch_cut import MipSolver, check_symmetric, degree_bound, solve_exact
+from gtsp_bench.solvers.exact.mip.options import MipOptions
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
+from gtsp_bench.registry import run_solver
+
+from .conftest import GTSPLIB
+from .test_milp import _instance
+
+
+def test_asymmetric_costs_are_refused():
+    """An EXPLICIT instance with asymmetric weights is refused with a clear message."""
+    w = np.array([[0, 1, 2, 3], [5, 0, 1, 2], [2, 1, 0, 1], [3, 2, 1, 0]], dtype=float)
+    inst = Instance(name="asym", clusters=tuple(np.zeros((1, 2)) for _ in range(4)), params=None,
+                    edge_weight_type="EXPLICIT", weights=w)
+    with pytest.raises(InputError, match="not symmetric"):
+        check_symmetric(price(inst, None))
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("depot", [True, False])
+def test_degree_bound_is_below_the_optimum(seed, depot):
+    """The LP-free bound reported when time runs out first never exceeds the brute-force optimum."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(3 if depot else 4, 6))
+    inst = _instance(seed, k, rng.integers(1, 5, size=k).tolist(), depot)
+    omega = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    bound = degree_bound(price(inst, omega))
+    assert 0 < bound <= run_solver("brute", inst, omega).objective * (1 + 1e-12)
+
+
+def test_degree_bound_on_gtsplib():
+    """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
+    bound = degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
+    assert 0.5 * 4040 < bound <= 4040
+
+
+@pytest.mark.parametrize("sizes, depot", [([3], True), ([2, 4], True), ([4, 1, 3], False)])
+def test_three_clusters_or_fewer_need_no_backend(sizes, depot):
+    """Up to three GTSP clusters (the depot's included) the optimum is proven without a model."""
+    inst = _instance(7, len(sizes), sizes, depot)
+
+    def no_backend(options: MipOptions):
+        raise AssertionError("no backend should be built")
+
+    r = solve_exact(price(inst, 0.5), no_backend, MipOptions())
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-12)
+    assert r.lower_bound == r.objective
+
+
+@pytest.mark.parametrize("solver", [MipSolver, Milp, Gurobi])
+def test_solver_defaults_are_the_option_defaults(solver):
+    """Each solver's keyword defaults are MipOptions' defaults (the options are written twice)."""
+    defaults = {f.name: f.default for f in dataclasses.fields(MipOptions)}
+    params = inspect.signature(solver.__init__).parameters
+    assert {name: params[name].default for name in defaults} == defaults
+    assert not set(params) - {"self", *defaults}

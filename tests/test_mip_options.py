@@ -1,0 +1,39 @@
+"""MILP options: checked on construction; the upper-bound tour is a tour."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.problem import price
+from gtsp_bench.registry import run_solver
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"prune": "yes"}, "prune must be true or false"),
+    ({"lns_trials": -1}, "lns_trials must be an integer >= 0"),
+    ({"root_rounds": 1.5}, "root_rounds must be an integer >= 0"),
+    ({"core_edges": True}, "core_edges must be an integer >= 0"),
+    ({"abs_gap": float("nan")}, "abs_gap must be a number"),
+    ({"abs_gap": -1.0}, "abs_gap must be a number"),
+])
+def test_options_are_validated(bad, message):
+    """Bad option values raise InputError naming the option."""
+    with pytest.raises(InputError, match=message):
+        MipOptions(**bad)
+
+
+@pytest.mark.parametrize("trials", [0, 1])
+@pytest.mark.parametrize("seed", range(3))
+def test_upper_bound_tour_is_a_tour_no_better_than_the_optimum(trials, seed):
+    """Greedy + local search (0 trials) and the LNS (1 trial): one node of every GTSP cluster,
+    costing at least the dp optimum."""
+    inst = generate_instance(7, 4, seed=seed)
+    problem = price(inst, 0.5)
+    tour = upper_bound_tour(problem, trials, seed, None)
+    assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
+    assert problem.tour_cost(tour) >= run_solver("dp", inst, 0.5).objective * (1 - 1e-12)
+    assert np.array_equal(tour, upper_bound_tour(problem, trials, seed, None))  # reproducible

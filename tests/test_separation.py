@@ -1,0 +1,110 @@
+"""Cuts and their separation: every cut found is valid for every tour and cuts its point off."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+from gtsp_bench.solvers.exact.mip import branch_cut, separation
+from gtsp_bench.solvers.exact.mip.model import GtspModel
+from gtsp_bench.solvers.exact.mip.separation import Cuts, subtour_cuts
+
+from .test_mip_model import _all_tours, _model, _random_tour, _vector
+
+SEPARATORS = ("node_cluster_cuts", "flow_cuts", "blossom_cuts", "subtour_cuts")
+
+
+def _capture(monkeypatch) -> list[tuple[str, GtspModel, Cuts, np.ndarray]]:
+    """Record every cut block the separators return during solves, with its point.
+
+    A separator is replaced wherever the search looks it up (the separation module, and the
+    branch-and-cut module for the subtour rows of integer points).
+    """
+    seen: list[tuple[str, GtspModel, Cuts, np.ndarray]] = []
+
+    def recording(name: str):
+        separator = getattr(separation, name)
+
+        def wrapped(model, values):
+            cuts = separator(model, values)
+            if cuts is not None:
+                seen.append((name, model, cuts, values.copy()))
+            return cuts
+        return wrapped
+
+    for name in SEPARATORS:
+        wrapped = recording(name)
+        for module in (separation, branch_cut):
+            if hasattr(module, name):
+                monkeypatch.setattr(module, name, wrapped)
+    return seen
+
+
+def test_every_cut_is_valid_and_violated(monkeypatch):
+    """Cuts found at the LP points of real solves hold for every tour and cut their point off.
+
+    HiGHS provides the LP points (root loop and branch and cut on tiny instances, no pruning and
+    a small core so that all separators and the branching run).
+    """
+    from gtsp_bench.solvers.exact.milp import Milp
+
+    seen = _capture(monkeypatch)
+    found: Counter[str] = Counter()
+    for seed in range(8):
+        model = _model(seed, k=6, max_size=2)
+        solver = Milp(prune=False, lns_trials=0, core_edges=2, root_rounds=1 + 3 * (seed % 2))
+        seen.clear()
+        solver.solve(model.problem.instance, model.problem.omega)
+        tours = None
+        for name, m, cuts, point in seen:
+            tours = _all_tours(m) if tours is None else tours
+            lhs = cuts.matrix(m, np.arange(m.n_cols)) @ tours.T  # (cuts, tours)
+            assert np.all(lhs <= cuts.rhs[:, None] + 1e-9), name
+            assert np.all(cuts.slack(m, point) < -1e-7), name
+            found[name] += len(cuts)
+    assert all(found[name] for name in SEPARATORS), found
+
+
+def test_subtour_cuts_none_for_a_tour():
+    """A tour has no subtour cut."""
+    model = _model(1)
+    rng = np.random.default_rng(0)
+    v = _vector(model, [_random_tour(model, rng)])
+    assert subtour_cuts(model, v) is None
+
+
+def test_subtour_cuts_cut_off_two_cycles():
+    """Two cycles: one cut (for the smaller), violated there and valid for every tour."""
+    model = _model(5, k=6, max_size=1)
+    v = _vector(model, [[0, 1, 2], [3, 4, 5, 6]])
+    cuts = subtour_cuts(model, v)
+    assert cuts is not None and len(cuts) == 1
+    assert cuts.slack(model, v)[0] < -0.5
+    lhs = cuts.matrix(model, np.arange(model.n_cols)) @ _all_tours(model).T
+    assert np.all(lhs <= cuts.rhs[:, None] + 1e-9)
+
+
+def test_stack_select_and_matrix_keep_rows_with_several_sides():
+    """A blossom-like row of eight sides survives stack and select (same coefficients and slack),
+    and the dual weights (both ways of computing them) are the duals times the coefficients."""
+    model = _model(6, k=6)
+    rng = np.random.default_rng(2)
+    n = model.n_nodes
+    blocks = [Cuts.one(rng.random(n) < 0.5, -rng.random(n), 1.0),
+              Cuts.one(rng.random((8, n)) < 0.5, np.zeros(n), 2.5),
+              Cuts.one(rng.random(n) < 0.5, -rng.random(n), 0.0)]
+    cuts = Cuts.stack(blocks)
+    assert len(cuts) == 3 and cuts.row.tolist() == [0, *[1] * 8, 2]
+    cols = np.arange(model.n_cols)
+    point = rng.random(model.n_cols)
+    kept = cuts.select(np.array([False, True, True]))
+    np.testing.assert_allclose(kept.matrix(model, cols), cuts.matrix(model, cols)[1:])
+    np.testing.assert_allclose(kept.slack(model, point), cuts.slack(model, point)[1:])
+    # slack is rhs - matrix @ point
+    np.testing.assert_allclose(cuts.slack(model, point), cuts.rhs - cuts.matrix(model, cols) @ point)
+    duals = np.array([-0.7, -1.3, -0.2])
+    # all edges: through the node-pair matrix; a few: side by side
+    for edges in (np.arange(len(model.tail)), np.arange(0, len(model.tail), 7)):
+        on_edge, on_y = cuts.dual_weights(model, duals, edges)
+        np.testing.assert_allclose(on_edge, duals @ cuts.matrix(model, n + edges))
+        np.testing.assert_allclose(on_y, duals @ cuts.ycoef)
