@@ -31,9 +31,17 @@ _SIZE_LIMIT_ERROR = 10010
 class LpResult:
     """An LP solve.
 
-    ``status`` is ``"optimal"``, ``"infeasible"``, ``"cutoff"`` (the bound passed the cutoff) or
-    ``"stopped"`` (time limit or other); ``values`` and ``reduced_costs`` (per backend column) and
-    ``duals`` (per row) are ``None`` unless optimal.
+    Attributes
+    ----------
+    status
+        ``"optimal"``, ``"infeasible"``, ``"cutoff"`` (the bound passed the cutoff) or
+        ``"stopped"`` (time limit or other).
+    objective
+        The LP optimum (``inf`` unless optimal).
+    values, reduced_costs
+        Per backend column; ``None`` unless optimal.
+    duals
+        Per row; ``None`` unless optimal.
     """
 
     status: str
@@ -115,7 +123,20 @@ class LazyMipBackend(Backend, Protocol):
 
 # ---------------------------------------------------------------------- the model in a backend
 class LpModel:
-    """The GTSP model held in a backend: which model columns it has, and the cuts in it."""
+    """The GTSP model held in a backend: which model columns it has, and the cuts in it.
+
+    Rows are the model's base rows, then the cuts in the order added (purging deletes some);
+    backend column ``k`` is model column ``cols[k]``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    backend
+        A new, empty backend.
+    cols
+        The model columns it starts with.
+    """
 
     def __init__(self, model: GtspModel, backend: Backend, cols: np.ndarray) -> None:
         self.model, self.backend = model, backend
@@ -241,7 +262,13 @@ class HighsBackend:
 
 # ---------------------------------------------------------------------- Gurobi
 def import_gurobipy() -> Any:
-    """gurobipy, or :class:`InputError` saying how to install it."""
+    """The gurobipy module, imported now.
+
+    Raises
+    ------
+    InputError
+        If gurobipy is not installed (the message says how to install it).
+    """
     try:
         import gurobipy
     except ImportError:

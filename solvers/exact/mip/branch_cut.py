@@ -41,7 +41,13 @@ def _is_integral(values: np.ndarray, tol: float = 1e-6) -> bool:
 
 
 def check_symmetric(problem: Problem) -> None:
-    """Raise :class:`InputError` unless the edge costs are symmetric (the model assumes it)."""
+    """Check that the edge costs are symmetric (the model has one variable per edge).
+
+    Raises
+    ------
+    InputError
+        If they are not (relative tolerance 1e-12).
+    """
     if not np.allclose(problem.edge_cost, problem.edge_cost.T, rtol=1e-12, atol=0):
         raise InputError(f"{problem.instance.name}: edge costs are not symmetric; the exact "
                          "solvers need a symmetric GTSP")
@@ -55,6 +61,16 @@ def degree_bound(problem: Problem) -> float:
     at least ``node[v]`` plus half of ``v``'s two cheapest edges to other clusters; the bound
     takes the cheapest node of each cluster by that measure. It is what a solve stopped by its
     time limit before the first LP reports.
+
+    Parameters
+    ----------
+    problem
+        The priced problem (symmetric edge costs, at least 3 GTSP clusters).
+
+    Returns
+    -------
+    float
+        The bound.
     """
     cluster_of = problem.cluster_of
     other = np.where(cluster_of[:, None] != cluster_of[None, :], problem.edge_cost, np.inf)
@@ -93,7 +109,25 @@ class _Node:
 
 
 class _Search:
-    """State of one exact solve: the incumbent, the bound, the LP and the phases."""
+    """State of one exact solve: the incumbent, the bound, the LP and the phases.
+
+    Parameters
+    ----------
+    problem
+        The priced problem.
+    backend
+        A new, empty backend; the model's core columns are put into it.
+    options
+        Shared options.
+    deadline
+        ``time.perf_counter()`` time at which the solve stops.
+    tour
+        The first incumbent (problem node ids).
+    kept
+        Candidate heads per GTSP cluster (after pruning).
+    stats
+        Filled with counters and seconds per phase.
+    """
 
     def __init__(self, problem: Problem, backend: Backend, options: MipOptions, deadline: float,
                  tour: np.ndarray, kept: Sequence[np.ndarray], stats: dict[str, Any]) -> None:

@@ -126,7 +126,21 @@ class GtspModel:
 
 
 def build_model(problem: Problem, kept: Sequence[np.ndarray]) -> GtspModel:
-    """The MILP over candidate heads ``kept`` (node ids per GTSP cluster, in cluster order)."""
+    """The MILP over candidate heads ``kept``.
+
+    Parameters
+    ----------
+    problem
+        The priced problem.
+    kept
+        Node ids of the candidate heads of each GTSP cluster, in cluster order.
+
+    Returns
+    -------
+    GtspModel
+        One ``y`` column per kept node, one ``x`` column per pair of kept nodes in different
+        clusters, with their costs.
+    """
     nodes = np.concatenate([np.asarray(k, dtype=np.int64) for k in kept])
     cluster = np.repeat(np.arange(len(kept)), [len(k) for k in kept])
     tail, head = np.triu_indices(len(nodes), 1)
@@ -137,7 +151,23 @@ def build_model(problem: Problem, kept: Sequence[np.ndarray]) -> GtspModel:
 
 
 def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np.ndarray:
-    """All y columns, each node's ``per_node`` cheapest edges and the edges of ``tour``."""
+    """The columns of the first LP: a core of cheap edges (the others are priced in later).
+
+    Parameters
+    ----------
+    model
+        The model.
+    per_node
+        Cheapest edges kept at each node (0: every column).
+    tour
+        Problem node ids of a tour whose edges join (keeping the LP feasible), or ``None``;
+        ignored when it uses a node the model does not have.
+
+    Returns
+    -------
+    numpy.ndarray
+        Model columns, increasing: all ``y`` columns, then the edges kept.
+    """
     n = model.n_nodes
     if per_node == 0:
         return np.arange(model.n_cols)

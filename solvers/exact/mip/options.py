@@ -53,8 +53,25 @@ class MipOptions:
 
 
 def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None) -> np.ndarray:
-    """A good tour: :class:`gtsp_bench.solvers.heuristics.lns.Lns` with ``trials`` trials
-    (0: greedy + local search)."""
+    """A good tour, the search's first upper bound.
+
+    Parameters
+    ----------
+    problem
+        The priced problem.
+    trials
+        Trials of :class:`gtsp_bench.solvers.heuristics.lns.Lns` (0: the greedy tour improved by
+        the local search only).
+    seed
+        Seed of the LNS.
+    time_limit
+        Seconds for the LNS (``None``: no limit).
+
+    Returns
+    -------
+    numpy.ndarray
+        Node ids of the tour, one per GTSP cluster (the depot first when there is one).
+    """
     if trials == 0:
         return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
     sol = Lns(trials=trials).solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)

@@ -125,6 +125,20 @@ def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int) -> Cuts:
     ``S`` must miss a whole cluster. Over ``S``: ``x(E(S)) - y(S - C) <= 0`` (when ``S`` holds
     all of ``C``: ``x(E(S)) - y(S) <= -1``); over ``T = V - S``: ``x(E(T)) - y(T) - y(T & C)
     <= -1``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    sink_side
+        ``(n_nodes,)`` bool mask of ``S``.
+    c
+        The cluster ``C``.
+
+    Returns
+    -------
+    Cuts
+        One row.
     """
     in_c = model.cluster == c
     s, t = sink_side, ~sink_side
@@ -144,6 +158,20 @@ def lifted_cut(model: GtspModel, sink_side: np.ndarray, y: np.ndarray) -> Cuts:
     ``x(delta(S))`` there: every cluster whose chosen nodes all lie in ``S`` joins ``S`` whole,
     which makes the right-hand side 2. Otherwise ``C`` is the cluster with the largest
     ``y(S & C)``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    sink_side
+        ``(n_nodes,)`` bool mask of ``S``.
+    y
+        The ``y`` part of the point.
+
+    Returns
+    -------
+    Cuts
+        One row, from :func:`subtour_cut`.
     """
     m = model.n_clusters
     outside = np.bincount(model.cluster[(y > ZERO) & ~sink_side], minlength=m)
@@ -160,6 +188,18 @@ def subtour_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
 
     For every cycle but the largest, with ``W`` the clusters it visits and ``S`` all candidate
     heads of ``W``: ``x(E(S)) <= |W| - 1``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    values
+        An integer point (a full model column vector).
+
+    Returns
+    -------
+    Cuts or None
+        One row per cycle but the largest, smallest cycle first.
     """
     comps = model.components(values)
     if len(comps) == 1:
@@ -175,6 +215,18 @@ def node_cluster_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     This is ``Subtour(S, D)`` for ``S = D + {i}``, found by enumeration (vectorised). The flow
     separation finds at most two cuts per cluster and round; these are the ones that stop the LP
     from spreading each head over many nodes, and they cut the number of rounds by 3-4x.
+
+    Parameters
+    ----------
+    model
+        The model.
+    values
+        A point (a full model column vector).
+
+    Returns
+    -------
+    Cuts or None
+        Every violated row, by node then cluster; ``None`` when none is.
     """
     y, x = model.split(values)
     n, m = model.n_nodes, model.n_clusters
@@ -215,6 +267,19 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     carry ``x_e`` both ways. A cut of value below 2 is a violated cut: ``x(delta(S)) + 2 y(C - S)
     < 2`` with ``S`` the sink side, which misses ``D``. Cuts from both extreme minimum cuts are
     returned, lifted by :func:`lifted_cut`.
+
+    Parameters
+    ----------
+    model
+        The model.
+    values
+        A fractional point (a full model column vector).
+
+    Returns
+    -------
+    Cuts or None
+        The lifted cuts still violated, cluster by cluster (a sink side once per cluster);
+        ``None`` when none is.
     """
     y, x = model.split(values)
     n, m = model.n_nodes, model.n_clusters
@@ -265,6 +330,18 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     ``z(E(H)) + z(T) <= |H| + (|T| - 1) / 2``. Handles are the connected components of the
     fractional ``z``; teeth the pairs with ``z = 1`` leaving them (an outside cluster on two
     teeth joins the handle). They close the half-integral root gaps the subtour cuts leave.
+
+    Parameters
+    ----------
+    model
+        The model.
+    values
+        A fractional point (a full model column vector).
+
+    Returns
+    -------
+    Cuts or None
+        One row per violated blossom (sides: the handle, then each tooth); ``None`` when none is.
     """
     _, x = model.split(values)
     m = model.n_clusters
@@ -299,7 +376,19 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
 def separate(model: GtspModel, values: np.ndarray, *, thorough: bool = True) -> Cuts | None:
     """Violated cuts at an LP solution: node-cluster rows and blossoms (cheap), then max-flow.
 
-    With ``thorough`` false the max-flows run only when the cheap families find nothing.
+    Parameters
+    ----------
+    model
+        The model.
+    values
+        A fractional point (a full model column vector).
+    thorough
+        Run the max-flows always; when false, only if the cheap families find nothing.
+
+    Returns
+    -------
+    Cuts or None
+        Node-cluster rows, then blossoms, then flow cuts; ``None`` when none is violated.
     """
     found = [c for c in (node_cluster_cuts(model, values), blossom_cuts(model, values))
              if c is not None]
