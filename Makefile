@@ -8,7 +8,7 @@ K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-heuristics bench-exact bench-drl clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl clean
 
 install: $(STAMP)
 
