@@ -8,7 +8,7 @@ K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
 
-.PHONY: install test lint bench bench-quick bench-heuristics bench-exact clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl clean
 
 install: $(STAMP)
 
@@ -24,6 +24,10 @@ test: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
+
+# The documentation site (mkdocs.yml, docs/) into site/; --strict turns broken links into errors.
+docs: $(STAMP)
+	$(BIN)/python -m mkdocs build --strict --site-dir site
 
 # `python -m` runs this checkout's code whichever checkout the venv was installed from.
 bench: $(STAMP)
@@ -45,4 +49,4 @@ bench-exact: $(STAMP)
 	$(BIN)/python benchmarks/exact.py $(if $(QUICK),--quick)
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info
+	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info

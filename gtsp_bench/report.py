@@ -1,8 +1,10 @@
 """The benchmark report: the paper's reported values, its claims checked against this run's
-tables, and the generated blocks of ``results/README.md``.
+tables, and the generated blocks of ``results/README.md`` and of the documentation pages.
 
 Everything here reads the CSV files the runner wrote, so the report can be refreshed without
-re-running anything (``gtsp-bench bench --report-only``).
+re-running anything (``gtsp-bench bench --report-only``). A generated block is the text between
+``<!-- BEGIN generated:NAME -->`` and ``<!-- END generated:NAME -->``; any Markdown file may hold
+any block, and :func:`refresh_blocks` rewrites the ones it has, keeping the text around them.
 """
 
 from __future__ import annotations
@@ -83,6 +85,9 @@ def ks_text(ks: Sequence[int]) -> str:
 
 _BEGIN, _END = "<!-- BEGIN generated:{} -->", "<!-- END generated:{} -->"
 REPORT_BLOCKS = ("setup", "ratio-omega", "ratio-k", "runtime", "trajectories", "training", "claims")
+#: Blocks the documentation pages may hold: every block but ``setup`` (it has the run's date and
+#: machine, which would change the pages on every run), plus ``summary``.
+DOCS_BLOCKS = ("summary", *REPORT_BLOCKS[1:])
 
 
 def _md_table(df: pd.DataFrame, fmt: Callable[[Any], str], index_name: str) -> str:
@@ -117,6 +122,29 @@ def _runtime_table(df: pd.DataFrame) -> pd.DataFrame:
     for name, vals in PAPER_RUNTIME_S.items():
         table[f"paper {name}"] = [vals.get(int(k), math.nan) for k in med.index]
     return table
+
+
+def _summary_table(ratios: pd.DataFrame, runtimes: pd.DataFrame | None) -> str:
+    """Per solver: mean gap to the optimum in % at each K, and the median time at the largest K."""
+    gaps = (mean_ratios(ratios, "K") - 1.0) * 100.0
+    table = pd.DataFrame(index=gaps.columns)
+    for k in gaps.index:
+        table[f"gap % K={k}"] = gaps.loc[k]
+    if runtimes is not None:
+        med = median_runtimes(runtimes)
+        k = med.index.max()
+        table[f"median time K={k}"] = med.loc[k].reindex(table.index)
+
+    def fmt(v: Any, col: str) -> str:
+        if col.startswith("median"):
+            return _secs(v)
+        return "-" if v is None or not np.isfinite(v) else f"{v:.2f}"
+
+    cols = list(table.columns)
+    lines = ["| " + " | ".join(["solver", *cols]) + " |", "|" + "---|" * (len(cols) + 1)]
+    for solver, row in table.iterrows():
+        lines.append("| " + " | ".join([f"`{solver}`", *(fmt(row[c], c) for c in cols)]) + " |")
+    return "\n".join(lines)
 
 
 def _trajectory_table(df: pd.DataFrame) -> str:
@@ -177,6 +205,8 @@ def report_blocks(
         blocks["ratio-k"] = (f"omega = {omegas}, mean energy / optimum over "
                              f"{df.groupby('K')['instance'].nunique().min()} instances per K\n\n"
                              + _md_table(mean_ratios(df, "K"), _ratio_fmt, "K"))
+    if frames["ratio-k"] is not None:
+        blocks["summary"] = _summary_table(frames["ratio-k"], frames["runtime"])
     df = frames["runtime"]
     if df is not None:
         blocks["runtime"] = ("Median seconds per instance (this run), then the paper's table\n\n"
@@ -359,23 +389,59 @@ def _block(name: str, body: str) -> str:
     return f"{_BEGIN.format(name)}\n{body}\n{_END.format(name)}"
 
 
-def write_report(out_dir: Path, checkpoint_dir: Path | None = None, jobs: int | None = None) -> Path:
-    """Refresh the generated blocks of ``out_dir/README.md`` from the CSVs (create it if absent).
+def refresh_blocks(path: Path, blocks: Mapping[str, str], names: Sequence[str] | None = None) -> bool:
+    """Rewrite the generated blocks ``path`` holds, keeping the text around them.
 
-    Hand-written text outside the blocks is kept; a block missing from the file is left out.
+    Only the blocks named in ``names`` (default: every key of ``blocks``) are touched; a block the
+    file holds but ``blocks`` lacks becomes ``(not run)``. The file is rewritten atomically, and only
+    if its text changes. Returns whether it changed.
     """
-    path = out_dir / "README.md"
-    blocks = report_blocks(out_dir, checkpoint_dir, jobs)
-    if path.exists():
-        text = path.read_text(encoding="utf-8")
-    else:
-        text = _REPORT_TEMPLATE.format(**{n: _block(n, "(not run)") for n in REPORT_BLOCKS})
-    for name in REPORT_BLOCKS:
+    old = text = path.read_text(encoding="utf-8")
+    for name in blocks if names is None else names:
         begin, end = _BEGIN.format(name), _END.format(name)
         i, j = text.find(begin), text.find(end)
         if i < 0 or j < i:
             continue
-        body = blocks.get(name, "(not run)")
-        text = text[:i] + _block(name, body) + text[j + len(end):]
-    atomic_write_text(path, text)
+        text = text[:i] + _block(name, blocks.get(name, "(not run)")) + text[j + len(end):]
+    if text != old:
+        atomic_write_text(path, text)
+    return text != old
+
+
+def docs_dir_for(out_dir: Path) -> Path | None:
+    """The documentation folder whose pages a run into ``out_dir`` refreshes, or ``None``.
+
+    That is ``docs/`` beside ``out_dir`` when ``out_dir`` is a project's results folder: its parent
+    holds ``mkdocs.yml``. A run into another folder (``results/quick``, a temporary folder) leaves
+    the documentation alone.
+    """
+    root = Path(out_dir).resolve().parent
+    docs = root / "docs"
+    return docs if (root / "mkdocs.yml").is_file() and docs.is_dir() else None
+
+
+def refresh_docs(docs_dir: Path, blocks: Mapping[str, str]) -> list[Path]:
+    """Refresh the generated blocks (:data:`DOCS_BLOCKS`) of every Markdown page under ``docs_dir``.
+
+    Returns the pages that changed.
+    """
+    return [page for page in sorted(Path(docs_dir).rglob("*.md"))
+            if refresh_blocks(page, blocks, DOCS_BLOCKS)]
+
+
+def write_report(out_dir: Path, checkpoint_dir: Path | None = None, jobs: int | None = None) -> Path:
+    """Refresh the generated blocks of ``out_dir/README.md`` from the CSVs (create it if absent).
+
+    Hand-written text outside the blocks is kept; a block missing from the file is left out. When
+    ``out_dir`` is the project's results folder (:func:`docs_dir_for`), the documentation pages'
+    generated blocks are refreshed from the same tables.
+    """
+    path = out_dir / "README.md"
+    blocks = report_blocks(out_dir, checkpoint_dir, jobs)
+    if not path.exists():
+        atomic_write_text(path, _REPORT_TEMPLATE.format(**{n: _block(n, "(not run)") for n in REPORT_BLOCKS}))
+    refresh_blocks(path, blocks, REPORT_BLOCKS)
+    docs = docs_dir_for(out_dir)
+    if docs is not None:
+        refresh_docs(docs, blocks)
     return path

@@ -7,7 +7,15 @@ import pandas as pd
 import pytest
 
 from gtsp_bench.errors import InputError
-from gtsp_bench.report import check_claims, ks_text, parse_ints, read_training_logs, write_report
+from gtsp_bench.report import (
+    check_claims,
+    docs_dir_for,
+    ks_text,
+    parse_ints,
+    read_training_logs,
+    refresh_blocks,
+    write_report,
+)
 
 
 def _ratios(values: dict[str, list[float]], x: str, xs: list) -> pd.DataFrame:
@@ -79,6 +87,49 @@ def test_write_report_keeps_prose_and_refreshes_blocks(tmp_path):
     text = readme.read_text()
     assert text.startswith("# Mine\n\nHand-written claim.") and text.endswith("More prose.\n")
     assert "old" not in text and text.count("| 4 | 1.0000 | 1.2500 |") == 1
+
+
+_RATIO_K = (
+    "experiment,K,N,instance,omega,solver,status,ratio,reference,runtime_s,time_limit_s,order\n"
+    "ratio-k,4,20,a,0.5,greedy,feasible,1.25,dp,0.01,10,0 1 2 3\n"
+    "ratio-k,4,20,a,0.5,dp,optimal,1.0,dp,0.02,10,0 1 2 3\n"
+    "ratio-k,5,20,b,0.5,greedy,feasible,1.5,dp,0.03,10,0 1 2 3 4\n"
+    "ratio-k,5,20,b,0.5,dp,optimal,1.0,dp,0.5,10,0 1 2 3 4\n")
+
+
+def test_refresh_blocks_touches_only_the_named_blocks(tmp_path):
+    """Named blocks are rewritten, others and the prose kept; an unchanged file is not rewritten."""
+    page = tmp_path / "page.md"
+    page.write_text("Intro.\n<!-- BEGIN generated:a -->\nold a\n<!-- END generated:a -->\nMid.\n"
+                    "<!-- BEGIN generated:b -->\nold b\n<!-- END generated:b -->\nEnd.\n")
+    assert refresh_blocks(page, {"a": "new a", "b": "new b"}, names=["a"])
+    text = page.read_text()
+    assert "new a" in text and "old b" in text and "old a" not in text
+    assert text.startswith("Intro.\n") and "\nMid.\n" in text and text.endswith("End.\n")
+    assert not refresh_blocks(page, {"a": "new a"})
+
+
+def test_a_run_into_the_results_folder_refreshes_the_docs(tmp_path):
+    """With mkdocs.yml beside results/, write_report fills the docs pages' blocks (summary: gap %
+    per K and the median time at the largest K); a run into results/quick leaves them alone."""
+    (tmp_path / "mkdocs.yml").write_text("site_name: t\n")
+    page = tmp_path / "docs" / "sub" / "page.md"
+    page.parent.mkdir(parents=True)
+    page.write_text("# P\n\n<!-- BEGIN generated:summary -->\n(not run)\n<!-- END generated:summary -->\n"
+                    "<!-- BEGIN generated:setup -->\nkept\n<!-- END generated:setup -->\n")
+    quick = tmp_path / "results" / "quick"
+    quick.mkdir(parents=True)
+    for out in (quick, tmp_path / "results"):
+        (out / "ratio-k.csv").write_text(_RATIO_K)
+        (out / "runtime.csv").write_text(_RATIO_K.replace("ratio-k,", "runtime,"))
+    assert docs_dir_for(quick) is None and docs_dir_for(tmp_path / "results") == tmp_path / "docs"
+    write_report(quick)
+    assert "(not run)" in page.read_text()
+    write_report(tmp_path / "results")
+    text = page.read_text()
+    assert "| solver | gap % K=4 | gap % K=5 | median time K=5 |" in text
+    assert "| `greedy` | 25.00 | 50.00 | 0.03 s |" in text and "| `dp` | 0.00 | 0.00 | 0.5 s |" in text
+    assert "kept" in text  # the setup block (dated) is never copied into the docs
 
 
 def test_new_report_has_every_block(tmp_path):
