@@ -94,7 +94,7 @@ def test_branch_and_cut_runs_and_agrees_with_dp():
 @pytest.mark.parametrize("name, best", [("11berlin52", 4040), ("20kroA100", 9711)])
 def test_proves_gtsplib_optima(name, best):
     """The literature optima of the two smallest GTSPLIB samples, proven (integer bound)."""
-    r = run_solver("milp", read_instance(GTSPLIB / f"{name}.gtsp"), None)
+    r = run_solver("milp", read_instance(GTSPLIB / f"{name}.gtsp.gz"), None)
     assert r.status == "optimal"
     assert r.objective == best
     assert r.lower_bound == best
@@ -128,7 +128,7 @@ def test_degree_bound_is_below_the_optimum(seed, depot):
 
 def test_degree_bound_on_gtsplib():
     """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
-    bound = gm.degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
+    bound = gm.degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None))
     assert 0.5 * 4040 < bound <= 4040
 
 
