@@ -140,10 +140,11 @@ for name in names:
         except SystemExit as e:
             code = e.code
     results[name] = [code, out.getvalue(), err.getvalue()]
-modules = {m: getattr(sys.modules[m], "__file__", None) for m in list(sys.modules)
-           if m == "gtsp_bench" or m.startswith("gtsp_bench.")}
-from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR
-print(json.dumps({"results": results, "modules": modules, "checkpoints": str(CHECKPOINT_DIR)}))
+mine = [m for m in list(sys.modules) if m == "gtsp_bench" or m.startswith("gtsp_bench.")]
+modules = {m: getattr(sys.modules[m], "__file__", None) for m in mine}
+checkpoints = sorted({str(sys.modules[m].CHECKPOINT_DIR) for m in mine
+                      if hasattr(sys.modules[m], "CHECKPOINT_DIR")})
+print(json.dumps({"results": results, "modules": modules, "checkpoints": checkpoints}))
 """
 
 
@@ -173,7 +174,9 @@ def test_installed_copy_is_the_one_used(installed, installed_run):
     assert "gtsp_bench.solvers.learned.drl" in modules
     for name, file in modules.items():
         assert file is None or Path(file).is_relative_to(installed), (name, file)
-    assert Path(installed_run["checkpoints"]).is_relative_to(installed)
+    assert installed_run["checkpoints"], "no module of the learned solvers has CHECKPOINT_DIR"
+    for folder in installed_run["checkpoints"]:
+        assert Path(folder).is_relative_to(installed) and any(Path(folder).glob("*.pt")), folder
     assert {b.name for b in BUILTIN} <= set(installed_run["listed"])
 
 
