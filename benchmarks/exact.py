@@ -6,9 +6,9 @@ A cell is the median time to a *proven* optimum over the instances (a solve that
 counts as slower than the limit) and how many were proven. All proven optima of one instance must
 agree (relative 1e-6); disagreements are counted and printed.
 
-GTSPLIB: every sample in ``best_known.csv`` up to ``--max-nodes`` nodes (default: up to 64lin318),
-solved by the solvers that fit; the table gives status, objective, bound and time, and whether the
-objective equals the best-known value.
+GTSPLIB (``instances/gtsplib/``): the five samples (``--names``) up to ``--max-nodes`` nodes
+(default: up to 64lin318), solved by the solvers that fit; the table gives status, objective,
+bound and time, and whether the objective equals the best-known value.
 
     python benchmarks/exact.py --quick                      # a subset, about a minute
     nice -n 5 python benchmarks/exact.py                    # K = 4..10, 15, 20, 30; all omegas
@@ -37,12 +37,13 @@ if str(REPO) not in sys.path:  # run as a script from anywhere
 
 from gtsp_bench.errors import InputError, SolverError  # noqa: E402
 from gtsp_bench.generator import instance_set  # noqa: E402
+from gtsp_bench.gtsplib import SAMPLES  # noqa: E402
 from gtsp_bench.instance import Instance  # noqa: E402
 from gtsp_bench.io import atomic_write_text, read_instance  # noqa: E402
 from gtsp_bench.registry import get_solver, run_solver, solver_names  # noqa: E402
 
 DEFAULT_K = (4, 5, 6, 7, 8, 9, 10, 15, 20, 30)
-DEFAULT_GTSPLIB = REPO.parent / "shared" / "gtsplib"
+DEFAULT_GTSPLIB = REPO / "instances" / "gtsplib"
 DEFAULT_CSV = REPO / "benchmarks" / "out" / "exact.csv"
 #: Relative tolerance between two proven optima of the same instance.
 AGREE = 1e-6
@@ -136,7 +137,7 @@ def gtsplib_runs(args: argparse.Namespace) -> tuple[list[Run], dict[str, tuple[i
                 and (not args.names or r["name"] in args.names)]
     runs, info = [], {}
     for row in rows:
-        inst = read_instance(folder / f"{row['name']}.gtsp")
+        inst = read_instance(folder / f"{row['name']}.gtsp.gz")
         info[inst.name] = (int(row["clusters"]), int(row["nodes"]), float(row["best_known"]), row["status"])
         for solver in args.solvers:
             if solver == "dp" and inst.n_clusters > args.dp_max_k:
@@ -215,7 +216,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gtsplib", default=str(DEFAULT_GTSPLIB), help="folder with best_known.csv")
     p.add_argument("--max-nodes", type=int, default=318,
                    help="largest GTSPLIB sample, in nodes (default 318: up to 64lin318)")
-    p.add_argument("--names", default=None, help="GTSPLIB samples, comma-separated (default all)")
+    p.add_argument("--names", default=None,
+                   help=f"GTSPLIB instances, comma-separated (default: the samples {','.join(SAMPLES)})")
     p.add_argument("--no-generated", action="store_true", help="skip the generated instances")
     p.add_argument("--no-gtsplib", action="store_true", help="skip GTSPLIB")
     p.add_argument("--csv", default=str(DEFAULT_CSV), help=f"CSV output (default {DEFAULT_CSV})")
@@ -232,7 +234,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args.k = args.k or list(DEFAULT_K)
     args.omegas = args.omegas if args.omegas is not None else [0.0, 0.5, 0.9]
     args.solvers = [s for s in args.solvers.split(",") if s]
-    args.names = [s for s in (args.names or "").split(",") if s]
+    args.names = [s for s in (args.names or ",".join(SAMPLES)).split(",") if s]
     unknown = [s for s in args.solvers if s not in solver_names()]
     if unknown:
         print(f"exact: error: unknown solver {unknown[0]!r} (valid: {', '.join(solver_names())})",

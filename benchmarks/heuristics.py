@@ -1,11 +1,12 @@
 """Heuristics side by side: mean gap to the optimum / best known and median time, in one run.
 
-For seeded generated sets (``instance_set(n, K, seed)``, omega 0.5) and for the GTSPLIB samples
-(``best_known.csv``), every solver runs on every instance with the same per-solve time limit and
-seed. The reference of a generated instance is the optimum of an exact solver picked by K
-(``--exact``, default ``dp`` up to K = 10, then ``milp``); when that solver is not registered,
-fails, or stops without proving optimality, the reference is the best objective any solver found,
-and the table says "best found" instead of "optimum". GTSPLIB gaps are to the best-known values.
+For seeded generated sets (``instance_set(n, K, seed)``, omega 0.5) and for the five GTSPLIB
+samples (``instances/gtsplib/``, ``--names`` for others), every solver runs on every instance with
+the same per-solve time limit and seed. The reference of a generated instance is the optimum of an
+exact solver picked by K (``--exact``, default ``dp`` up to K = 10, then ``milp``); when that
+solver is not registered, fails, or stops without proving optimality, the reference is the best
+objective any solver found, and the table says "best found" instead of "optimum". GTSPLIB gaps are
+to the best-known values.
 
     python benchmarks/heuristics.py --quick                  # a few minutes less: a subset
     nice -n 5 python benchmarks/heuristics.py --csv out.csv  # everything, one row per solve in CSV
@@ -32,12 +33,13 @@ if str(REPO) not in sys.path:  # run as a script from anywhere
 
 from gtsp_bench.errors import InputError, SolverError  # noqa: E402
 from gtsp_bench.generator import instance_set  # noqa: E402
+from gtsp_bench.gtsplib import SAMPLES  # noqa: E402
 from gtsp_bench.instance import Instance  # noqa: E402
 from gtsp_bench.io import atomic_write_text, read_instance  # noqa: E402
 from gtsp_bench.registry import get_solver, run_solver, solver_names  # noqa: E402
 
 SOLVERS = ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp")
-DEFAULT_GTSPLIB = REPO.parent / "shared" / "gtsplib"
+DEFAULT_GTSPLIB = REPO / "instances" / "gtsplib"
 
 
 @dataclass(frozen=True)
@@ -132,7 +134,7 @@ def gtsplib_runs(args: argparse.Namespace, solvers: Sequence[str]) -> list[Run]:
         rows = [r for r in csv.DictReader(f) if not args.names or r["name"] in args.names]
     runs = []
     for row in rows:
-        inst = read_instance(folder / f"{row['name']}.gtsp")
+        inst = read_instance(folder / f"{row['name']}.gtsp.gz")
         ref = float(row["best_known"])
         kind = "optimum (literature)" if row["status"] == "optimal" else "best known"
         found = solve_all(inst, None, solvers, args.time_limit, args.seed)
@@ -191,7 +193,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--exact-time-limit", type=float, default=120.0,
                    help="seconds per exact reference solve (default 120)")
     p.add_argument("--gtsplib", default=str(DEFAULT_GTSPLIB), help="folder with best_known.csv")
-    p.add_argument("--names", nargs="*", default=None, help="GTSPLIB instances (default all)")
+    p.add_argument("--names", nargs="*", default=None,
+                   help=f"GTSPLIB instances (default: the samples {' '.join(SAMPLES)})")
     p.add_argument("--no-gtsplib", action="store_true", help="skip GTSPLIB")
     p.add_argument("--csv", default=None, help="also write one row per solve to this CSV file")
     return p
@@ -205,6 +208,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.time_limit = args.time_limit or 5.0
         if args.names is None:
             args.names = ["11berlin52", "20kroA100", "40d198"]
+    if args.names is None:
+        args.names = list(SAMPLES)
     args.k = args.k or [4, 7, 10, 20]
     args.instances = args.instances or 10
     args.time_limit = args.time_limit or 10.0

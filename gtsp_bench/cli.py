@@ -28,7 +28,7 @@ examples:
   gtsp-bench solve k7.json --solver greedy --omega 0.3
   gtsp-bench solve k7.json --solver brute --json > sol.json
   gtsp-bench evaluate k7.json --solution sol.json --omega 0.3
-  gtsp-bench solve ../shared/gtsplib/11berlin52.gtsp --solver greedy
+  gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver greedy
   gtsp-bench solvers
   gtsp-bench bench -K 4..10
 """
@@ -110,7 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("solve", help="solve an instance with a registered solver",
                        description="Solve a .json (UAV) or .gtsp (GTSPLIB) instance. The result "
                        "is re-checked and re-priced by the shared evaluator.")
-    p.add_argument("file", metavar="FILE", help="instance file (.json or .gtsp)")
+    p.add_argument("file", metavar="FILE", help="instance file (.json, .gtsp, or either .gz)")
     p.add_argument("--solver", "-s", required=True, help="solver name (see 'gtsp-bench solvers')")
     p.add_argument("--omega", "-w", type=_float, default=DEFAULT_OMEGA, metavar="W",
                    help=f"weight of the ground energy in [0, 1] (default: {DEFAULT_OMEGA}; "
@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("evaluate", help="re-price a solution file",
                        description="Check and price a solution (a JSON object with 'order' and "
                        "'heads', as 'solve --json' prints) on an instance.")
-    p.add_argument("file", metavar="FILE", help="instance file (.json or .gtsp)")
+    p.add_argument("file", metavar="FILE", help="instance file (.json, .gtsp, or either .gz)")
     p.add_argument("--solution", required=True, metavar="SOL.json", help="solution file")
     p.add_argument("--omega", "-w", type=_float, default=DEFAULT_OMEGA, metavar="W",
                    help=f"weight of the ground energy in [0, 1] (default: {DEFAULT_OMEGA})")

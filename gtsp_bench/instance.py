@@ -27,7 +27,7 @@ from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.params import EnergyParams
 
 #: Edge-weight rules: exact Euclidean (UAV instances) and the TSPLIB95 rules GTSPLIB uses.
-EDGE_WEIGHT_TYPES = ("EUCLIDEAN", "EUC_2D", "CEIL_2D", "ATT", "GEO", "EXPLICIT")
+EDGE_WEIGHT_TYPES = ("EUCLIDEAN", "EUC_2D", "CEIL_2D", "ATT", "GEO", "GEOM", "EXPLICIT")
 
 
 def _frozen_array(a: Any, dtype: type = np.float64) -> np.ndarray:
@@ -222,7 +222,8 @@ def pair_distances(a: np.ndarray, b: np.ndarray, edge_weight_type: str) -> np.nd
         Broadcastable arrays of shape ``(..., 2)``.
     edge_weight_type
         ``"EUCLIDEAN"`` (exact) or ``"EUC_2D"``, ``"CEIL_2D"``, ``"ATT"``, ``"GEO"`` as defined by
-        TSPLIB95 (nint(x) = floor(x + 0.5); GEO takes whole degrees by truncation, as Concorde).
+        TSPLIB95 (nint(x) = floor(x + 0.5); GEO takes whole degrees by truncation, as Concorde), or
+        ``"GEOM"`` as LKH and Concorde define it (exact degrees, metres on a sphere).
 
     Returns
     -------
@@ -233,6 +234,8 @@ def pair_distances(a: np.ndarray, b: np.ndarray, edge_weight_type: str) -> np.nd
     b = np.asarray(b, dtype=np.float64)
     if edge_weight_type == "GEO":
         return _geo_distances(a, b)
+    if edge_weight_type == "GEOM":
+        return _geom_distances(a, b)
     d2 = ((a - b) ** 2).sum(axis=-1)
     if edge_weight_type == "EUCLIDEAN":
         return np.sqrt(d2)
@@ -260,6 +263,20 @@ def _geo_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     q3 = np.cos(lat_a + lat_b)
     arg = np.clip(0.5 * ((1.0 + q1) * q2 - (1.0 - q1) * q3), -1.0, 1.0)
     return np.floor(6378.388 * np.arccos(arg) + 1.0)
+
+
+def _geom_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """GEOM: great-circle metres on a sphere of radius 6378388 m, (latitude, longitude) in
+    degrees; the rounding of LKH and Concorde, (int)(d + 1)."""
+    lat_a, lon_a = np.pi * (a[..., 0] / 180.0), np.pi * (a[..., 1] / 180.0)
+    lat_b, lon_b = np.pi * (b[..., 0] / 180.0), np.pi * (b[..., 1] / 180.0)
+    dlon = lon_a - lon_b
+    q1 = np.cos(lat_b) * np.sin(dlon)
+    q3 = np.sin(dlon / 2.0)
+    q4 = np.cos(dlon / 2.0)
+    q2 = np.sin(lat_b - lat_a) * q4 * q4 + np.sin(lat_a + lat_b) * q3 * q3
+    q5 = np.cos(lat_a - lat_b) * q4 * q4 - np.cos(lat_a + lat_b) * q3 * q3
+    return np.floor(6378388.0 * np.arctan2(np.sqrt(q1 * q1 + q2 * q2), q5) + 1.0)
 
 
 def node_distance_matrix(instance: Instance) -> np.ndarray:

@@ -1,10 +1,16 @@
 """Reading and writing files. Parsing lives in :mod:`gtsp_bench.parse`; this module opens files,
-prefixes errors with the file name, and writes atomically (a temporary file, then a rename)."""
+prefixes errors with the file name, and writes atomically (a temporary file, then a rename).
+
+A file whose name ends in ``.gz`` (``11berlin52.gtsp.gz``) is gzip-compressed: it is read and
+written transparently, its format named by the suffix before ``.gz``.
+"""
 
 from __future__ import annotations
 
+import gzip
 import os
 import tempfile
+import zlib
 from pathlib import Path
 
 from gtsp_bench.errors import InputError
@@ -15,14 +21,40 @@ from gtsp_bench.parse import (
     parse_gtsp,
     parse_json_instance,
     parse_solution,
+    parse_tour,
+    tour_to_solution,
 )
 
-#: Instance file suffixes this package reads.
+#: Instance file suffixes this package reads and writes, each also gzip-compressed (``+ ".gz"``).
 INSTANCE_SUFFIXES = (".json", ".gtsp")
+#: Suffix of a gzip-compressed file.
+GZIP_SUFFIX = ".gz"
+#: Suffix of a TSPLIB tour file (GTSPLIB's best tours).
+TOUR_SUFFIX = ".tour"
+
+
+def format_suffix(path: str | os.PathLike[str]) -> str:
+    """The suffix that names a file's format, lower case: ``.gtsp`` for ``x.gtsp`` and ``x.gtsp.gz``."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix == GZIP_SUFFIX:
+        suffix = Path(p.stem).suffix.lower()
+    return suffix
+
+
+def _instance_suffix(p: Path) -> str:
+    suffix = format_suffix(p)
+    if suffix not in INSTANCE_SUFFIXES:
+        raise InputError(f"{p}: unknown instance format (expected {' or '.join(INSTANCE_SUFFIXES)}, "
+                         f"optionally gzip-compressed as {INSTANCE_SUFFIXES[-1]}{GZIP_SUFFIX})")
+    return suffix
 
 
 def _read_text(path: Path) -> str:
+    """The UTF-8 text of a file, gunzipped if its name ends in ``.gz``."""
     try:
+        if path.suffix.lower() == GZIP_SUFFIX:
+            return _gunzip(path, path.read_bytes()).decode("utf-8")
         return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
@@ -34,23 +66,29 @@ def _read_text(path: Path) -> str:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
 
 
+def _gunzip(path: Path, data: bytes) -> bytes:
+    try:
+        return gzip.decompress(data)
+    except (gzip.BadGzipFile, EOFError, zlib.error) as e:
+        raise InputError(f"{path}: not a valid gzip file ({e})") from None
+
+
 def read_instance(path: str | os.PathLike[str]) -> Instance:
-    """Read an instance from a ``.json`` (UAV) or ``.gtsp`` (GTSPLIB) file.
+    """Read an instance from a ``.json`` (UAV) or ``.gtsp`` (GTSPLIB) file, either maybe ``.gz``.
 
     Raises
     ------
     InputError
-        ``"<path>: <problem>"`` for a missing, unreadable or malformed file.
+        ``"<path>: <problem>"`` for a missing, unreadable or malformed file (a bad gzip file too).
     """
     p = Path(path)
-    suffix = p.suffix.lower()
-    if suffix not in INSTANCE_SUFFIXES:
-        raise InputError(f"{p}: unknown instance format (expected {' or '.join(INSTANCE_SUFFIXES)})")
+    suffix = _instance_suffix(p)
     text = _read_text(p)
     try:
         if suffix == ".gtsp":
             return parse_gtsp(text)
-        return parse_json_instance(text, default_name=p.stem)
+        stem = Path(p.stem).stem if p.suffix.lower() == GZIP_SUFFIX else p.stem
+        return parse_json_instance(text, default_name=stem)
     except InputError as e:
         raise InputError(f"{p}: {e}") from None
 
@@ -66,14 +104,30 @@ def read_solution(path: str | os.PathLike[str]) -> tuple[list[int], list[int]]:
         raise InputError(f"{p}: {e}") from None
 
 
-def write_instance(instance: Instance, path: str | os.PathLike[str]) -> Path:
-    """Write an instance atomically, as JSON or GTSPLIB by the file suffix."""
+def read_tour(path: str | os.PathLike[str], instance: Instance) -> tuple[list[int], list[int]]:
+    """Read a TSPLIB tour file (``.tour`` or ``.tour.gz``) of a GTSPLIB instance as ``(order, heads)``.
+
+    ``instance`` is the instance read from the file the tour's node ids refer to.
+    """
     p = Path(path)
-    suffix = p.suffix.lower()
-    if suffix not in INSTANCE_SUFFIXES:
-        raise InputError(f"{p}: unknown instance format (expected {' or '.join(INSTANCE_SUFFIXES)})")
+    try:
+        return tour_to_solution(instance, parse_tour(_read_text(p)))
+    except InputError as e:
+        if str(e).startswith(f"{p}:"):
+            raise
+        raise InputError(f"{p}: {e}") from None
+
+
+def write_instance(instance: Instance, path: str | os.PathLike[str]) -> Path:
+    """Write an instance atomically, as JSON or GTSPLIB by the file suffix; gzip-compressed when
+    the name ends in ``.gz`` (reproducibly: no name or time stamp in the gzip header)."""
+    p = Path(path)
+    suffix = _instance_suffix(p)
     text = format_gtsp(instance) if suffix == ".gtsp" else format_json_instance(instance)
-    atomic_write_text(p, text)
+    if p.suffix.lower() == GZIP_SUFFIX:
+        atomic_write_bytes(p, gzip.compress(text.encode("utf-8"), mtime=0))
+    else:
+        atomic_write_text(p, text)
     return p
 
 

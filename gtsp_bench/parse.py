@@ -9,8 +9,12 @@ Two instance formats:
      "meta": {...}}                                  # optional, free
 
 * GTSPLIB ``.gtsp``: TSPLIB95 plus ``TYPE : GTSP``, ``GTSP_SETS : M`` and a ``GTSP_SET_SECTION``
-  of ``set_id node node ... -1`` records. Coordinate types EUC_2D, CEIL_2D, ATT, GEO, and EXPLICIT
-  with ``EDGE_WEIGHT_FORMAT : FULL_MATRIX``.
+  of ``set_id node node ... -1`` records. Coordinate types EUC_2D, CEIL_2D, ATT, GEO, GEOM, and
+  EXPLICIT weights in any TSPLIB95 ``EDGE_WEIGHT_FORMAT`` (FULL_MATRIX, UPPER_ROW, LOWER_ROW,
+  UPPER_DIAG_ROW, LOWER_DIAG_ROW and the ``_COL`` forms), symmetric only.
+
+And TSPLIB tour files (``TOUR_SECTION`` of 1-based node ids, ``-1`` at the end), the form in which
+GTSPLIB's best tours are given: :func:`parse_tour`, then :func:`tour_to_solution`.
 
 Every function raises :class:`~gtsp_bench.errors.InputError` with a message that names the
 problem; the I/O layer prefixes the file name.
@@ -20,7 +24,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -160,29 +164,45 @@ def parse_solution(text: str) -> tuple[list[int], list[int]]:
 
 # ---------------------------------------------------------------------- GTSPLIB
 _SECTIONS = {"NODE_COORD_SECTION", "GTSP_SET_SECTION", "EDGE_WEIGHT_SECTION",
-             "DISPLAY_DATA_SECTION", "EOF"}
-_COORD_TYPES = {"EUC_2D", "CEIL_2D", "ATT", "GEO"}
+             "DISPLAY_DATA_SECTION", "TOUR_SECTION", "EOF"}
+#: Header keys also accepted without a colon (``TYPE  AGTSP`` occurs in GTSPLIB).
+_HEADER_KEYS = {"NAME", "TYPE", "COMMENT", "DIMENSION", "GTSP_SETS", "EDGE_WEIGHT_TYPE",
+                "EDGE_WEIGHT_FORMAT", "NODE_COORD_TYPE", "DISPLAY_DATA_TYPE"}
+_NUMBER_START = frozenset("0123456789-+.")
+_COORD_TYPES = {"EUC_2D", "CEIL_2D", "ATT", "GEO", "GEOM"}
+#: EDGE_WEIGHT_FORMAT of a symmetric matrix given by one triangle: the triangle in row-major
+#: order, and whether the diagonal is included. A ``_COL`` form lists the other triangle row by
+#: row, the same entries of a symmetric matrix in the same order.
+_TRIANGLES = {
+    "UPPER_ROW": ("upper", False), "LOWER_COL": ("upper", False),
+    "LOWER_ROW": ("lower", False), "UPPER_COL": ("lower", False),
+    "UPPER_DIAG_ROW": ("upper", True), "LOWER_DIAG_COL": ("upper", True),
+    "LOWER_DIAG_ROW": ("lower", True), "UPPER_DIAG_COL": ("lower", True),
+}
+_WEIGHT_FORMATS = ("FULL_MATRIX", *_TRIANGLES)
 
 
 def _split_key(line: str) -> tuple[str, str]:
     if ":" in line:
         key, value = line.split(":", 1)
         return key.strip().upper(), value.strip()
+    parts = line.split(None, 1)
+    if len(parts) == 2 and parts[0].upper() in _HEADER_KEYS:
+        return parts[0].upper(), parts[1].strip()
     return line.strip().upper(), ""
 
 
-def parse_gtsp(text: str) -> Instance:
-    """Parse a GTSPLIB ``.gtsp`` text into a distance-only :class:`Instance`.
-
-    Clusters keep the file's set order; the nodes of a set keep the order in which the set lists
-    them. ``meta`` records the name, comment and original node ids.
-    """
+def _tsplib_sections(text: str) -> tuple[dict[str, str], dict[str, list[str]]]:
+    """Split TSPLIB text into its header (``KEY: value``) and its sections' lines (to ``EOF``)."""
     header: dict[str, str] = {}
     sections: dict[str, list[str]] = {}
     current: str | None = None
     for raw in text.splitlines():
         line = raw.strip()
         if not line:
+            continue
+        if current is not None and line[0] in _NUMBER_START:  # a data line: no key to look for
+            sections[current].append(line)
             continue
         key, value = _split_key(line)
         if key in _SECTIONS:
@@ -194,10 +214,23 @@ def parse_gtsp(text: str) -> Instance:
             header[key] = value
         else:
             sections[current].append(line)
+    return header, sections
 
-    if header.get("TYPE", "").upper() not in {"GTSP", "AGTSP"} and "GTSP_SETS" not in header:
+
+def parse_gtsp(text: str) -> Instance:
+    """Parse a GTSPLIB ``.gtsp`` text into a distance-only :class:`Instance`.
+
+    Clusters keep the file's set order; the nodes of a set keep the order in which the set lists
+    them. ``meta`` records the name, comment and original node ids. Explicit weights in any
+    triangle format become the full matrix; the diagonal is ignored (TSPLIB95; some files put a
+    large number there) and stored as 0.
+    """
+    header, sections = _tsplib_sections(text)
+    # The first word: "TYPE : GTSP (M.~Hofmeister)" occurs.
+    gtsp_type = (header.get("TYPE", "").split() or [""])[0].upper()
+    if gtsp_type not in {"GTSP", "AGTSP"} and "GTSP_SETS" not in header:
         raise InputError("not a GTSP file (TYPE is not GTSP and there is no GTSP_SETS)")
-    if header.get("TYPE", "").upper() == "AGTSP":
+    if gtsp_type == "AGTSP":
         raise InputError("asymmetric GTSP (AGTSP) is not supported")
     ewt = header.get("EDGE_WEIGHT_TYPE", "").upper()
     if ewt not in _COORD_TYPES | {"EXPLICIT"}:
@@ -212,7 +245,7 @@ def parse_gtsp(text: str) -> Instance:
     sets = _parse_sets(sections.get("GTSP_SET_SECTION"), dim, n_sets)
     weights = None
     if ewt == "EXPLICIT":
-        weights = _parse_full_matrix(header, sections.get("EDGE_WEIGHT_SECTION"), dim)
+        weights = _parse_weights(header, sections.get("EDGE_WEIGHT_SECTION"), dim)
     order = np.concatenate(sets)  # original (0-based) node ids in cluster order
     if coords is None:
         coords = np.full((dim, 2), np.nan)
@@ -319,21 +352,38 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
     return [np.array(sets[s]) for s in sorted(sets)]
 
 
-def _parse_full_matrix(header: Mapping[str, str], lines: list[str] | None, dim: int) -> np.ndarray:
+def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int) -> np.ndarray:
+    """The full symmetric ``(dim, dim)`` matrix of an EDGE_WEIGHT_SECTION, zero diagonal."""
     fmt = header.get("EDGE_WEIGHT_FORMAT", "").upper()
-    if fmt != "FULL_MATRIX":
-        raise InputError(f"EXPLICIT weights: only FULL_MATRIX is supported, got {fmt or '(missing)'!r}")
+    if fmt not in _WEIGHT_FORMATS:
+        raise InputError(f"unsupported EDGE_WEIGHT_FORMAT {fmt or '(missing)'!r} "
+                         f"(supported: {', '.join(_WEIGHT_FORMATS)})")
     if lines is None:
         raise InputError("missing EDGE_WEIGHT_SECTION")
     try:
-        values = np.array([float(t) for line in lines for t in line.split()])
+        values = np.array(" ".join(lines).split(), dtype=np.float64)
     except ValueError:
         raise InputError("EDGE_WEIGHT_SECTION has a value that is not a number") from None
-    if values.size != dim * dim:
-        raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, FULL_MATRIX needs {dim * dim}")
-    w = values.reshape(dim, dim)
-    if not np.allclose(w, w.T):
-        raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
+    if not np.all(np.isfinite(values)):
+        raise InputError("EDGE_WEIGHT_SECTION has a NaN or infinite value")
+    if fmt == "FULL_MATRIX":
+        needed = dim * dim
+    else:
+        triangle, diagonal = _TRIANGLES[fmt]
+        needed = dim * (dim + 1) // 2 if diagonal else dim * (dim - 1) // 2
+    if values.size != needed:
+        raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, {fmt} needs {needed}")
+    if fmt == "FULL_MATRIX":
+        w = values.reshape(dim, dim)
+        if not np.allclose(w, w.T):
+            raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
+    else:
+        w = np.zeros((dim, dim))
+        offset = 0 if diagonal else 1
+        rows, cols = np.triu_indices(dim, offset) if triangle == "upper" else np.tril_indices(dim, -offset)
+        w[rows, cols] = values
+        w[cols, rows] = values
+    np.fill_diagonal(w, 0.0)
     return w
 
 
@@ -360,3 +410,66 @@ def format_gtsp(instance: Instance) -> str:
         lines.append(f"{k + 1} {nodes} -1")
     lines.append("EOF")
     return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------- TSPLIB tours
+def parse_tour(text: str) -> list[int]:
+    """The node ids of a TSPLIB tour file's ``TOUR_SECTION`` (1-based, as in the instance file).
+
+    The section ends at ``-1`` (or at ``EOF``); a tour file with ``DIMENSION`` must list that many
+    nodes. GTSPLIB's best tours list one node of each cluster in visiting order.
+    """
+    header, sections = _tsplib_sections(text)
+    lines = sections.get("TOUR_SECTION")
+    if lines is None:
+        raise InputError("missing TOUR_SECTION")
+    nodes: list[int] = []
+    for token in " ".join(lines).split():
+        try:
+            node = int(token)
+        except ValueError:
+            raise InputError(f"TOUR_SECTION has {token!r}, not a node id") from None
+        if node == -1:
+            break
+        if node < 1:
+            raise InputError(f"TOUR_SECTION has node {node}; node ids start at 1")
+        nodes.append(node)
+    if not nodes:
+        raise InputError("TOUR_SECTION is empty")
+    if "DIMENSION" in header and len(nodes) != _header_int(header, "DIMENSION"):
+        raise InputError(f"DIMENSION says {header['DIMENSION']} nodes but TOUR_SECTION has {len(nodes)}")
+    return nodes
+
+
+def tour_to_solution(instance: Instance, node_ids: Sequence[int]) -> tuple[list[int], list[int]]:
+    """Turn a tour of a GTSPLIB file's node ids (1-based) into ``(order, heads)``.
+
+    Parameters
+    ----------
+    instance
+        The instance read from that file (its ``meta["node_ids"]`` maps its nodes to the file's).
+    node_ids
+        One node of each cluster, in visiting order.
+
+    Raises
+    ------
+    InputError
+        For an instance without the file's node ids, or a node that is not in the file. A tour
+        that misses or repeats a cluster is left to :meth:`Instance.check_solution`.
+    """
+    file_ids = instance.meta.get("node_ids")
+    if file_ids is None:
+        raise InputError(f"{instance.name} was not read from a GTSPLIB file: it has no file node ids")
+    position = {int(v): i for i, v in enumerate(file_ids)}
+    cluster_of = instance.cluster_of
+    offsets = instance.offsets
+    order: list[int] = []
+    heads = [-1] * instance.n_clusters
+    for v in node_ids:
+        if v not in position:
+            raise InputError(f"tour names node {v}, which is not in {instance.name}")
+        node = position[v]
+        k = int(cluster_of[node])
+        order.append(k)
+        heads[k] = node - int(offsets[k])
+    return order, heads

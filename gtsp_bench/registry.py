@@ -15,7 +15,7 @@ import math
 import sys
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib.metadata import entry_points
 from typing import Any, Protocol, runtime_checkable
 
@@ -141,12 +141,17 @@ class Result:
 # ---------------------------------------------------------------------- registry
 @dataclass(frozen=True)
 class SolverSpec:
-    """A registered solver: its name, where its class lives and one line describing it."""
+    """A registered solver: its name, where its class lives and one line describing it.
+
+    ``plugin`` is the distribution (or, without one, the entry point) a plug-in solver comes from,
+    ``None`` for a built-in or a solver registered by :func:`register_solver`.
+    """
 
     name: str
     target: str | type
     description: str
     bench: bool = True
+    plugin: str | None = None
 
     def import_path(self) -> str | None:
         """``"module:Class"`` by which a fresh process (a runner worker) can import the class.
@@ -165,19 +170,40 @@ class SolverSpec:
         return f"{module}:{qualname}"
 
     def load(self) -> type:
-        """Import and return the solver class."""
+        """Import and return the solver class.
+
+        Raises
+        ------
+        InputError
+            When its module cannot be imported, lacks the class, or the object is no solver class;
+            for a plug-in, also whatever else its import raises.
+        """
         if not isinstance(self.target, str):
             return self.target
         module_name, _, attr = self.target.partition(":")
         try:
-            module = importlib.import_module(module_name)
+            obj: Any = importlib.import_module(module_name)
+            for part in attr.split(".") if attr else ():
+                obj = getattr(obj, part)
         except ImportError as e:
             raise InputError(f"solver {self.name!r} is not available: {e}") from None
-        return getattr(module, attr)
+        except AttributeError:
+            raise InputError(f"solver {self.name!r}: module {module_name!r} has no {attr!r}") from None
+        except Exception as e:
+            if self.plugin is None:
+                raise
+            raise InputError(f"solver {self.name!r} (plug-in {self.target}) cannot be loaded: "
+                             f"{type(e).__name__}: {e}") from None
+        if not inspect.isclass(obj) or not callable(getattr(obj, "solve", None)):
+            raise InputError(f"solver {self.name!r}: {self.target} is not a solver class "
+                             "(a class with a solve method)")
+        return obj
 
 
 _REGISTRY: dict[str, SolverSpec] = {}
 _builtins_loaded = False
+#: Plug-ins registered from entry points whose class has not been imported to describe it yet.
+_UNDESCRIBED: set[str] = set()
 
 
 def register_solver(
@@ -207,20 +233,52 @@ def register_solver(
 ENTRY_POINT_GROUP = "gtsp_bench.solvers"
 
 
+def _warn(message: str) -> None:
+    print(f"gtsp-bench: warning: {message}", file=sys.stderr)
+
+
 def _load_entry_points() -> None:
     """Register the solvers other installed packages declare in :data:`ENTRY_POINT_GROUP`.
 
     An entry point ``name = "package.module:Class"`` registers ``Class`` under ``name``; the class
-    is imported only when used. A name that is already taken is skipped with a warning.
+    is imported only when used or listed (:func:`solver_specs`). A name that is already taken (a
+    built-in's, or an earlier plug-in's) is skipped with a warning.
     """
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
+    try:
+        found = list(entry_points(group=ENTRY_POINT_GROUP))
+    except Exception as e:  # a broken installed distribution must not break the built-ins
+        _warn(f"cannot read the {ENTRY_POINT_GROUP!r} entry points ({type(e).__name__}: {e}); "
+              "plug-in solvers skipped")
+        return
+    for ep in found:
         if ep.name in _REGISTRY:
-            print(f"gtsp-bench: warning: solver {ep.name!r} from entry point {ep.value!r} "
-                  "is already registered; skipped", file=sys.stderr)
+            _warn(f"solver {ep.name!r} from entry point {ep.value!r} is already registered; skipped")
             continue
         dist = getattr(ep, "dist", None)
-        origin = f" (from {dist.name})" if dist is not None else ""
-        _REGISTRY[ep.name] = SolverSpec(ep.name, ep.value, f"plug-in {ep.value}{origin}")
+        origin = dist.name if dist is not None else ep.value
+        _REGISTRY[ep.name] = SolverSpec(ep.name, ep.value, f"plug-in {ep.value} (from {origin})",
+                                        plugin=origin)
+        _UNDESCRIBED.add(ep.name)
+
+
+def _describe_plugins(registry: dict[str, SolverSpec]) -> None:
+    """Import each plug-in not yet described: its description becomes its class docstring's first
+    line. One that cannot be loaded is dropped from the registry with a warning, so that listing
+    and default benchmark runs go on with the others."""
+    for name in sorted(_UNDESCRIBED):
+        _UNDESCRIBED.discard(name)
+        spec = registry.get(name)
+        if spec is None or spec.plugin is None:
+            continue
+        try:
+            cls = spec.load()
+        except InputError as e:
+            _warn(f"{e}; skipped")
+            del registry[name]
+            continue
+        doc = (inspect.getdoc(cls) or "").strip().splitlines()
+        first = doc[0].strip() if doc else spec.target
+        registry[name] = replace(spec, description=f"{first} (plug-in from {spec.plugin})")
 
 
 def _registry() -> dict[str, SolverSpec]:
@@ -235,13 +293,16 @@ def _registry() -> dict[str, SolverSpec]:
 
 
 def solver_specs() -> list[SolverSpec]:
-    """All registered solvers, sorted by name."""
-    return sorted(_registry().values(), key=lambda s: s.name)
+    """All registered solvers, sorted by name (plug-ins imported to describe them; one that
+    cannot be loaded is left out with a warning)."""
+    registry = _registry()
+    _describe_plugins(registry)
+    return sorted(registry.values(), key=lambda s: s.name)
 
 
 def solver_names() -> list[str]:
-    """Names of all registered solvers, sorted."""
-    return [s.name for s in solver_specs()]
+    """Names of all registered solvers, sorted (nothing is imported)."""
+    return sorted(_registry())
 
 
 def solver_revision(name: str) -> str:

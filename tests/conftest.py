@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
-import os
 from pathlib import Path
 
 import numpy as np
@@ -12,9 +10,8 @@ import pytest
 from gtsp_bench.instance import Instance
 
 REPO = Path(__file__).resolve().parents[1]
-#: GTSPLIB samples live beside the project, not in it (see ../shared/gtsplib/README.md);
-#: GTSP_BENCH_GTSPLIB points elsewhere.
-GTSPLIB = Path(os.environ.get("GTSP_BENCH_GTSPLIB", REPO.parent / "shared" / "gtsplib"))
+#: The GTSPLIB library, a folder of the repository (instances/gtsplib/README.md).
+GTSPLIB = REPO / "instances" / "gtsplib"
 DATA = Path(__file__).resolve().parent / "data"
 
 
@@ -44,16 +41,7 @@ def _restore_solver_registry():
 
 
 def gtsplib_files() -> list[Path]:
-    """All sample .gtsp files (an empty list if the shared folder is missing)."""
-    return sorted(GTSPLIB.glob("*.gtsp"))
+    """The five sample instances the tests use (:data:`gtsp_bench.gtsplib.SAMPLES`)."""
+    from gtsp_bench.gtsplib import SAMPLES
 
-
-def pytest_collection_modifyitems(config, items):
-    """Skip, with the reason shown, tests that read GTSPLIB files when the folder is missing."""
-    if GTSPLIB.is_dir():
-        return
-    skip = pytest.mark.skip(reason=f"GTSPLIB samples not found at {GTSPLIB}")
-    for item in items:
-        func = getattr(item, "function", None)
-        if func is not None and "GTSPLIB" in inspect.getsource(func):
-            item.add_marker(skip)
+    return [GTSPLIB / f"{name}.gtsp.gz" for name in SAMPLES]

@@ -65,7 +65,7 @@ def test_time_limit_returns_best_tour():
 
 def test_gtsplib_file():
     """Without a depot the ants start anywhere; the tour is valid and not below the optimum."""
-    r = run_solver(get_solver("aco", iterations=10), read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    r = run_solver(get_solver("aco", iterations=10), read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     assert sorted(r.order) == list(range(11))
     assert r.objective >= 4040
 

@@ -45,7 +45,7 @@ def test_degree_bound_is_below_the_optimum(seed, depot):
 
 def test_degree_bound_on_gtsplib():
     """On 11berlin52 the bound is below the proven optimum 4040 (and not trivially zero)."""
-    bound = degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp"), None))
+    bound = degree_bound(price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None))
     assert 0.5 * 4040 < bound <= 4040
 
 

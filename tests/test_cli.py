@@ -62,7 +62,7 @@ def test_solve_then_evaluate_round_trip(capsys, k4, tmp_path):
 
 def test_gtsp_file_energy_is_null(capsys):
     """On a .gtsp file the objective is the tour length, energy and omega are null."""
-    code, out, _ = run(capsys, "solve", str(GTSPLIB / "11berlin52.gtsp"), "-s", "greedy", "--json")
+    code, out, _ = run(capsys, "solve", str(GTSPLIB / "11berlin52.gtsp.gz"), "-s", "greedy", "--json")
     assert code == 0
     data = json.loads(out)
     assert data["energy"] is None and data["omega"] is None

@@ -39,7 +39,7 @@ def test_dp_equals_brute_force(seed, depot):
 
 def test_dp_solves_berlin_to_the_proven_optimum():
     """11berlin52 (no depot, integer weights): 4040, the optimum in the literature."""
-    r = run_solver("dp", read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    r = run_solver("dp", read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     assert r.status == "optimal"
     assert r.objective == 4040
 

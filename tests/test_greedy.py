@@ -38,6 +38,6 @@ def test_greedy_is_feasible_and_never_below_the_optimum(seed, omega):
 
 def test_greedy_on_gtsplib():
     """Without a depot greedy still returns a valid tour of every cluster."""
-    r = run_solver("greedy", read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    r = run_solver("greedy", read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     assert sorted(r.order) == list(range(11))
     assert r.objective >= 4040  # the proven optimum

@@ -75,6 +75,22 @@ def test_geo_distance_follows_tsplib():
     assert d_half == 56.0  # int(55.66 + 1.0)
 
 
+def test_geom_distance_is_great_circle_metres():
+    """GEOM: exact degrees, a sphere of radius 6378388 m, int(d + 1) (LKH, Concorde); checked
+    against the haversine formula on long and short legs."""
+    import math
+
+    def haversine(a, b):
+        (la, lo), (lb, lob) = (tuple(math.radians(v) for v in p) for p in (a, b))
+        h = math.sin((lb - la) / 2) ** 2 + math.cos(la) * math.cos(lb) * math.sin((lob - lo) / 2) ** 2
+        return 6378388.0 * 2 * math.asin(math.sqrt(h))
+
+    for a, b in [((40.0, 75.0), (34.05, 118.25)), ((33.58, 85.85), (32.67, 85.44)), ((-10, 5), (10, -5))]:
+        d = pair_distances(np.array(a), np.array(b), "GEOM")
+        assert d == math.floor(haversine(a, b) + 1.0)
+        assert pair_distances(np.array(b), np.array(a), "GEOM") == d
+
+
 def test_distance_matrix_puts_the_depot_last(tiny):
     """The matrix has the depot as its last row and column, zero diagonal, symmetric."""
     w = node_distance_matrix(tiny)

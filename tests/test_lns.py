@@ -56,7 +56,7 @@ def test_time_limit_returns_best_tour():
 
 def test_gtsplib_file():
     """On 11berlin52 (no depot) a short run reaches the proven optimum 4040."""
-    r = run_solver(get_solver("lns", iterations=100, trials=1), read_instance(GTSPLIB / "11berlin52.gtsp"),
+    r = run_solver(get_solver("lns", iterations=100, trials=1), read_instance(GTSPLIB / "11berlin52.gtsp.gz"),
                    None)
     assert sorted(r.order) == list(range(11))
     assert r.objective == 4040

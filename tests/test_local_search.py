@@ -114,7 +114,7 @@ def test_greedy_ls_between_optimum_and_greedy(seed):
 
 def test_greedy_ls_on_gtsplib():
     """On a .gtsp file (no depot) greedy+ls gives a valid tour no shorter than the optimum."""
-    inst = read_instance(GTSPLIB / "11berlin52.gtsp")
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
     r = run_solver("greedy+ls", inst, None)
     assert sorted(r.order) == list(range(11))
     assert r.objective >= 4040

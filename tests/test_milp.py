@@ -92,7 +92,7 @@ def test_branch_and_cut_runs_and_agrees_with_dp():
 @pytest.mark.parametrize("name, best", [("11berlin52", 4040), ("20kroA100", 9711)])
 def test_proves_gtsplib_optima(name, best):
     """The literature optima of the two smallest GTSPLIB samples, proven (integer bound)."""
-    r = run_solver("milp", read_instance(GTSPLIB / f"{name}.gtsp"), None)
+    r = run_solver("milp", read_instance(GTSPLIB / f"{name}.gtsp.gz"), None)
     assert r.status == "optimal"
     assert r.objective == best
     assert r.lower_bound == best

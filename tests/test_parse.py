@@ -1,7 +1,9 @@
-"""Parsing and formatting (no files): JSON instances, solutions, GTSPLIB text."""
+"""Parsing and formatting (no files, but the GTSPLIB samples): JSON instances, solutions, GTSPLIB
+text in every explicit weight format, TSPLIB tours."""
 
 from __future__ import annotations
 
+import gzip
 import json
 
 import numpy as np
@@ -14,6 +16,8 @@ from gtsp_bench.parse import (
     parse_gtsp,
     parse_json_instance,
     parse_solution,
+    parse_tour,
+    tour_to_solution,
 )
 
 from .conftest import gtsplib_files
@@ -86,12 +90,11 @@ def test_solution_parsing():
 
 @pytest.mark.parametrize("path", gtsplib_files(), ids=lambda p: p.stem)
 def test_every_sample_gtsplib_file_parses_and_round_trips(path):
-    """Every shared .gtsp parses with the announced sizes, and write -> read keeps it intact."""
-    inst = parse_gtsp(path.read_text())
-    n_sets = int("".join(ch for ch in path.stem[:3] if ch.isdigit()))  # "11berlin52" -> 11
-    header = dict(
-        line.split(":", 1) for line in path.read_text().splitlines()[:8] if ":" in line
-    )
+    """Every sample .gtsp parses with the announced sizes, and write -> read keeps it intact."""
+    text = gzip.decompress(path.read_bytes()).decode()
+    inst = parse_gtsp(text)
+    n_sets = int("".join(ch for ch in path.name[:3] if ch.isdigit()))  # "11berlin52" -> 11
+    header = dict(line.split(":", 1) for line in text.splitlines()[:8] if ":" in line)
     header = {k.strip(): v.strip() for k, v in header.items()}
     assert inst.n_clusters == int(header["GTSP_SETS"])
     assert inst.n_nodes == int(header["DIMENSION"])
@@ -172,3 +175,128 @@ def test_formats_refuse_the_wrong_kind(tiny):
         format_gtsp(tiny)
     with pytest.raises(InputError, match=r"write it as \.gtsp"):
         format_json_instance(parse_gtsp(SMALL))
+
+
+# A symmetric 4 x 4 matrix with distinct entries, so that a misplaced value shows.
+MATRIX = [[0, 1, 2, 3], [1, 0, 4, 5], [2, 4, 0, 6], [3, 5, 6, 0]]
+
+
+def _entries(fmt: str) -> list[int]:
+    """MATRIX's entries in the order TSPLIB95 defines for ``fmt`` (written out, not computed by
+    the parser's rule): ``*_ROW`` row by row, ``*_COL`` column by column."""
+    n, m = len(MATRIX), MATRIX
+    keep = {
+        "UPPER_ROW": lambda i, j: j > i, "LOWER_ROW": lambda i, j: j < i,
+        "UPPER_DIAG_ROW": lambda i, j: j >= i, "LOWER_DIAG_ROW": lambda i, j: j <= i,
+    }
+    if fmt == "FULL_MATRIX":
+        return [m[i][j] for i in range(n) for j in range(n)]
+    if fmt.endswith("_ROW"):
+        return [m[i][j] for i in range(n) for j in range(n) if keep[fmt](i, j)]
+    row_rule = keep[fmt.replace("_COL", "_ROW")]  # UPPER_COL: the upper triangle, column by column
+    return [m[i][j] for j in range(n) for i in range(n) if row_rule(i, j)]
+
+
+def _explicit(fmt: str, values: list) -> str:
+    return "\n".join([
+        "NAME: e4", "TYPE: GTSP", "DIMENSION: 4", "GTSP_SETS: 2", "EDGE_WEIGHT_TYPE: EXPLICIT",
+        f"EDGE_WEIGHT_FORMAT: {fmt}", "EDGE_WEIGHT_SECTION",
+        *(" ".join(str(v) for v in values[i:i + 3]) for i in range(0, len(values), 3)),
+        "GTSP_SET_SECTION", "1 1 2 -1", "2 3 4 -1", "EOF", "",
+    ])
+
+
+@pytest.mark.parametrize("fmt", ["FULL_MATRIX", "UPPER_ROW", "LOWER_ROW", "UPPER_DIAG_ROW",
+                                 "LOWER_DIAG_ROW", "UPPER_COL", "LOWER_COL", "UPPER_DIAG_COL",
+                                 "LOWER_DIAG_COL"])
+def test_every_explicit_weight_format_gives_the_full_matrix(fmt):
+    """Each TSPLIB95 EDGE_WEIGHT_FORMAT (values wrapped over lines) is read as the same matrix."""
+    inst = parse_gtsp(_explicit(fmt, _entries(fmt)))
+    assert inst.weights.tolist() == MATRIX
+
+
+def test_explicit_diagonal_is_ignored():
+    """A large number on the diagonal (as some GTSPLIB files have) is read as 0."""
+    values = _entries("LOWER_DIAG_ROW")
+    big = [100000000 if v == 0 else v for v in values]
+    assert parse_gtsp(_explicit("LOWER_DIAG_ROW", big)).weights.tolist() == MATRIX
+
+
+@pytest.mark.parametrize(
+    ("fmt", "values", "message"),
+    [
+        ("UPPER_ROW", list(range(5)), "has 5 values, UPPER_ROW needs 6"),
+        ("LOWER_DIAG_ROW", list(range(11)), "has 11 values, LOWER_DIAG_ROW needs 10"),
+        ("FUNCTION", [], "unsupported EDGE_WEIGHT_FORMAT 'FUNCTION'"),
+        ("UPPER_ROW", [1, 2, 3, 4, 5, "x"], "not a number"),
+        ("UPPER_ROW", [1, 2, 3, 4, 5, "inf"], "NaN or infinite"),
+        ("FULL_MATRIX", [0, 1, 2, 3, 9, 0, 4, 5, 2, 4, 0, 6, 3, 5, 6, 0], "not symmetric"),
+    ],
+)
+def test_bad_explicit_weights(fmt, values, message):
+    """A wrong count, an unknown format, a bad number or an asymmetric matrix is an InputError."""
+    with pytest.raises(InputError, match=message):
+        parse_gtsp(_explicit(fmt, values))
+
+
+@pytest.mark.parametrize(
+    ("line", "accepted"),
+    [
+        ("TYPE: GTSP", True),
+        ("TYPE : GTSP (M.~Hofmeister)", True),   # a comment after the type
+        ("TYPE : TSP", True),                    # GTSP_SETS says what it is
+        ("TYPE: AGTSP", False),
+        ("TYPE  AGTSP", False),                  # no colon
+        ("TYPE:  AGTSP", False),
+    ],
+)
+def test_type_line_variants(line, accepted):
+    """GTSPLIB's TYPE lines as they occur; every form of AGTSP is refused by name."""
+    text = SMALL.replace("TYPE: GTSP", line)
+    if accepted:
+        assert parse_gtsp(text).n_clusters == 2
+    else:
+        with pytest.raises(InputError, match=r"asymmetric GTSP \(AGTSP\) is not supported"):
+            parse_gtsp(text)
+
+
+def test_geom_is_a_coordinate_type():
+    """GEOM files keep their coordinates and weight type."""
+    inst = parse_gtsp(SMALL.replace("EUC_2D", "GEOM"))
+    assert inst.edge_weight_type == "GEOM" and inst.weights is None
+
+
+TOUR = "NAME : small.tour\nCOMMENT : Length = 10\nTYPE : TOUR\nDIMENSION : 2\nTOUR_SECTION\n4\n1\n-1\nEOF\n"
+
+
+def test_tour_to_solution():
+    """A tour's 1-based file node ids become (order, heads) of the instance read from that file."""
+    inst = parse_gtsp(SMALL)  # cluster 0 = nodes 1, 3; cluster 1 = nodes 2, 4
+    assert parse_tour(TOUR) == [4, 1]
+    assert tour_to_solution(inst, [4, 1]) == ([1, 0], [0, 1])
+    assert tour_to_solution(inst, [3, 2]) == ([0, 1], [1, 0])
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("TOUR_SECTION\n4\n1\n-1\n", "", "missing TOUR_SECTION"),
+        ("4\n1\n-1", "-1", "TOUR_SECTION is empty"),
+        ("4\n1", "4\nx", "TOUR_SECTION has 'x', not a node id"),
+        ("4\n1", "4\n0", "node ids start at 1"),
+        ("DIMENSION : 2", "DIMENSION : 3", "DIMENSION says 3 nodes but TOUR_SECTION has 2"),
+    ],
+)
+def test_bad_tours(old, new, message):
+    """A tour file without a usable TOUR_SECTION is an InputError naming the problem."""
+    with pytest.raises(InputError, match=message):
+        parse_tour(TOUR.replace(old, new))
+
+
+def test_tour_of_unknown_nodes_or_instances():
+    """A node the file does not have, or an instance not read from a GTSPLIB file, is refused."""
+    with pytest.raises(InputError, match="tour names node 7, which is not in small"):
+        tour_to_solution(parse_gtsp(SMALL), [7, 1])
+    uav = parse_json_instance(_text())
+    with pytest.raises(InputError, match="was not read from a GTSPLIB file"):
+        tour_to_solution(uav, [1, 2])

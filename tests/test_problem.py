@@ -44,7 +44,7 @@ def test_depot_is_its_own_cluster_with_zero_cost(tiny):
 
 def test_gtsplib_problem_has_no_node_costs():
     """A GTSPLIB file prices to integer edge weights and zero node costs."""
-    inst = read_instance(GTSPLIB / "11berlin52.gtsp")
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
     problem = price(inst, None)
     assert problem.depot is None
     assert np.all(problem.node_cost == 0)

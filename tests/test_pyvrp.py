@@ -38,7 +38,7 @@ def test_folded_costs_price_tours_exactly():
 
 def test_whole_number_costs_are_not_scaled():
     """GTSPLIB weights are integers: they are used as they are."""
-    problem = price(read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    problem = price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     cost, scale = folded_costs(problem)
     assert scale == 1.0
     assert np.array_equal(cost, problem.edge_cost.astype(np.int64))
@@ -74,7 +74,7 @@ def test_single_cluster_without_depot():
 
 def test_gtsplib_file():
     """On 11berlin52 PyVRP reaches the proven optimum 4040."""
-    r = run_solver(get_solver("pyvrp", **FAST), read_instance(GTSPLIB / "11berlin52.gtsp"), None)
+    r = run_solver(get_solver("pyvrp", **FAST), read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     assert r.objective == 4040
 
 

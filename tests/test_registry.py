@@ -1,4 +1,5 @@
-"""Registry and harness: unknown names, plug-in solvers, and the checks on what solvers claim."""
+"""Registry and harness: unknown names, plug-in solvers (registered, or by entry point), and the
+checks on what solvers claim."""
 
 from __future__ import annotations
 
@@ -141,3 +142,64 @@ def test_solver_revision_is_the_learned_checkpoints_hash():
     assert solver_revision("am") != digest and solver_revision("greedy") == ""
     with pytest.raises(InputError, match="unknown solver"):
         solver_revision("nope")
+
+
+# ---------------------------------------------------------------------- entry-point plug-ins
+def _plugins(monkeypatch, *eps: tuple[str, str]) -> None:
+    """Reload the registry as if the installed packages declared these entry points."""
+    from importlib.metadata import EntryPoint
+
+    from gtsp_bench import registry
+
+    def entry_points(group: str) -> list[EntryPoint]:
+        assert group == registry.ENTRY_POINT_GROUP == "gtsp_bench.solvers"
+        return [EntryPoint(name, value, group) for name, value in eps]
+
+    monkeypatch.setattr(registry, "entry_points", entry_points)
+    monkeypatch.setattr(registry, "_builtins_loaded", False)
+    registry._REGISTRY.clear()  # conftest restores it after the test
+
+
+def test_plugin_is_described_by_its_docstring_and_solves(monkeypatch, tiny):
+    """A plug-in is listed with its class docstring's first line and solves by name."""
+    from gtsp_bench.registry import solver_specs
+
+    _plugins(monkeypatch, ("t-plugin", "tests.test_registry:Fixed"))
+    spec = next(s for s in solver_specs() if s.name == "t-plugin")
+    assert spec.description == (
+        "A test solver that returns whatever it was built with. (plug-in from tests.test_registry:Fixed)")
+    assert spec.plugin == "tests.test_registry:Fixed"
+    assert run_solver("t-plugin", tiny, 0.5).solver == "t-plugin"
+
+
+def test_plugin_clash_and_broken_plugins_leave_the_others(monkeypatch, capsys, tmp_path):
+    """A plug-in under a built-in's name is skipped with a warning; one whose module is missing,
+    raises on import, or is not a solver class is left out of the listing with a warning, and
+    asking for it by name is a clear InputError."""
+    from gtsp_bench.registry import solver_specs
+
+    (tmp_path / "t_raising_plugin.py").write_text("raise RuntimeError('boom')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    _plugins(monkeypatch, ("greedy", "tests.test_registry:Fixed"), ("t-missing", "t_no_such_module:X"),
+             ("t-raising", "t_raising_plugin:X"), ("t-function", "os.path:join"),
+             ("t-noattr", "tests.test_registry:Nope"), ("t-good", "tests.test_registry:Fixed"))
+    assert {"t-missing", "t-raising", "t-function", "t-good"} <= set(solver_names())  # nothing imported
+    err = capsys.readouterr().err
+    assert "solver 'greedy' from entry point 'tests.test_registry:Fixed' is already registered" in err
+    specs = {s.name: s for s in solver_specs()}
+    err = capsys.readouterr().err
+    assert "t-good" in specs and "greedy" in specs and specs["greedy"].plugin is None
+    assert not {"t-missing", "t-raising", "t-function", "t-noattr"} & set(specs)
+    assert "warning: solver 't-missing' is not available: No module named 't_no_such_module'; skipped" in err
+    assert ("warning: solver 't-raising' (plug-in t_raising_plugin:X) cannot be loaded: "
+            "RuntimeError: boom; skipped") in err
+    assert "warning: solver 't-function': os.path:join is not a solver class" in err
+    assert "warning: solver 't-noattr': module 'tests.test_registry' has no 'Nope'" in err
+
+
+def test_broken_plugin_by_name_is_an_input_error(monkeypatch):
+    """Used by name (without listing first), a broken plug-in is one clean InputError."""
+    _plugins(monkeypatch, ("t-raising", "t_raising_plugin_absent:X"))
+    with pytest.raises(InputError, match="solver 't-raising' is not available"):
+        get_solver("t-raising")
+    assert "greedy" in solver_names()
