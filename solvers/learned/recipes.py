@@ -18,6 +18,7 @@ the config it came from.
 The shipped models were trained with seed 2 for 2280 s (38 minutes) of wall time on one torch
 thread; ``drl`` and ``am`` carry those settings, so ``gtsp-bench train --model drl -o drl.pt``
 repeats that run (up to the speed of the machine: the time budget decides the last step).
+``drl-paper`` has the same seed and runs its 40,000 steps with no time budget.
 """
 
 from __future__ import annotations
@@ -46,9 +47,11 @@ DEFAULT_RECIPE = "drl"
 class TrainConfig:
     """Settings of one training run: a recipe, or a recipe with some fields changed.
 
-    Every field is recorded in the JSON beside the policy file (``"train"``), and all but
-    ``recipe``, ``grad_clip``, ``log_every`` and ``model_options`` beyond drl's three switches
-    have a ``gtsp-bench train`` switch of the same name.
+    Every field is recorded in the JSON beside the policy file (``"train"``). ``gtsp-bench
+    train --model RECIPE`` picks the recipe; a switch of the same name sets each other field but
+    ``model``, ``baseline`` and ``grad_clip`` (the recipe's), ``log_every`` (with
+    ``--val-every``: its greatest common divisor with the recipe's) and ``model_options``
+    (drl: ``--glimpse``, ``--local``, ``--energy``).
 
     Attributes
     ----------
