@@ -114,8 +114,8 @@ class Trainer:
         self.model = build_policy(policy_config(cfg))
         self.baseline = get_baseline(cfg.baseline, self.model)
         own = self.baseline.parameters()
-        mine = {id(p) for p in own}
-        actor = [p for p in self.model.parameters() if id(p) not in mine]
+        own_ids = {id(p) for p in own}
+        actor = [p for p in self.model.parameters() if id(p) not in own_ids]
         self.optims = [torch.optim.Adam(actor, lr=cfg.lr)]
         if own:
             self.optims.append(torch.optim.Adam(own, lr=cfg.lr))
