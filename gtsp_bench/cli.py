@@ -14,10 +14,13 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gtsp_bench import __version__
 from gtsp_bench.errors import InputError, SolverError
+
+if TYPE_CHECKING:
+    from gtsp_bench.solvers.learned.recipes import TrainConfig
 
 DEFAULT_OMEGA = 0.5
 DEFAULT_TIME_LIMIT = 60.0
@@ -288,7 +291,7 @@ _TRAIN_FIELDS = ("clusters", "nodes", "steps", "batch", "lr", "seed", "omega", "
 _DRL_SWITCHES = ("glimpse", "local", "energy", "direction")
 
 
-def train_config(args: argparse.Namespace) -> Any:
+def train_config(args: argparse.Namespace) -> TrainConfig:
     """The training settings of a parsed ``gtsp-bench train`` command: the recipe named by
     ``--model``, with the switches given changed (a
     :class:`~gtsp_bench.solvers.learned.recipes.TrainConfig`)."""

@@ -113,6 +113,8 @@ def test_bad_names_settings_and_values_are_input_errors():
         get_recipe("drl", keep="first")
     with pytest.raises(InputError, match="val_every must be a multiple of log_every"):
         get_recipe("drl", val_every=75)
+    with pytest.raises(InputError, match="model_options must be a mapping"):
+        get_recipe("drl", model_options="local")
     with pytest.raises(TypeError):
         TrainConfig(model="drl")  # type: ignore[call-arg]
     with pytest.raises(InputError, match="recipe must be one of"):

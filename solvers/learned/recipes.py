@@ -33,7 +33,15 @@ from gtsp_bench.solvers.learned.baselines import BASELINES
 from gtsp_bench.solvers.learned.env import HEAD_RULES
 from gtsp_bench.solvers.learned.policies import get_policy
 
-from gtsp_bench.checks import check_bool, check_choice, check_float, check_int, check_omega, check_seed
+from gtsp_bench.checks import (
+    check_bool,
+    check_choice,
+    check_float,
+    check_int,
+    check_mapping,
+    check_omega,
+    check_seed,
+)
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import check_generator_args
 
@@ -129,10 +137,8 @@ class TrainConfig:
     log_every: int
 
     def __post_init__(self) -> None:
-        if not isinstance(self.model_options, dict):
-            raise InputError(f"model_options must be a dict of the policy's arguments, "
-                             f"got {self.model_options!r}")
-        object.__setattr__(self, "model_options", dict(self.model_options))  # a copy of its own
+        # a copy of its own: changing it leaves the recipe (or the caller's dict) alone
+        object.__setattr__(self, "model_options", check_mapping("model_options", self.model_options))
         policy = get_policy(self.model)
         check_choice(f"baseline of the {self.model} policy", self.baseline,
                      tuple(b for b in policy.baselines if b in BASELINES))
