@@ -7,7 +7,7 @@ script prints the mean and max gap to the exact optimum (the ``dp`` solver, cach
 ``benchmarks/drl_exact.csv``) and the batched wall time per instance (median of ``--repeats``
 runs). Every solution is re-priced by the shared evaluator. A first reference row, ``bound:
 paper heads``, is the best any visiting order can reach when heads follow the paper's rule
-(:func:`gtsp_bench.solvers.learned.rl_common.paper_rule_optimum`): no policy using that rule can be below it.
+(:func:`gtsp_bench.solvers.learned.oracles.paper_rule_optimum`): no policy using that rule can be below it.
 
     PYTHONPATH=. .venv/bin/python benchmarks/drl.py [--repeats 3] [--k 4,7,10] [--csv out.csv]
 
@@ -25,7 +25,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from gtsp_bench.solvers.learned.rl_common import env_from_instances, paper_rule_optimum
+from gtsp_bench.solvers.learned.env import env_from_instances
+from gtsp_bench.solvers.learned.oracles import paper_rule_optimum
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.generator import instance_set

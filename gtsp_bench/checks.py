@@ -5,7 +5,7 @@ naming it; a good one is returned in its canonical type."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TypeVar
 
 import numpy as np
@@ -92,3 +92,11 @@ def check_time_limit(time_limit: object) -> float | None:
 def check_seed(seed: object) -> int:
     """A valid seed (an integer >= 0, as numpy's generators take) or :class:`InputError`."""
     return check_int("seed", seed, 0)
+
+
+def check_mapping(name: str, value: object) -> dict:
+    """A copy of ``value`` as a dict if it is a mapping (e.g. keyword options), else
+    :class:`InputError`."""
+    if not isinstance(value, Mapping):
+        raise InputError(f"{name} must be a mapping of names to values, got {value!r}")
+    return dict(value)

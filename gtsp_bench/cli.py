@@ -14,10 +14,13 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gtsp_bench import __version__
 from gtsp_bench.errors import InputError, SolverError
+
+if TYPE_CHECKING:
+    from gtsp_bench.solvers.learned.recipes import TrainConfig
 
 DEFAULT_OMEGA = 0.5
 DEFAULT_TIME_LIMIT = 60.0
@@ -53,6 +56,10 @@ def _int(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+
+
+def _float_or_none(text: str) -> float | None:
+    return None if text.strip().lower() == "none" else _float(text)
 
 
 def _seed(text: str) -> int:
@@ -136,43 +143,45 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("train", help="train a learned policy (drl, am) on generated instances",
                        description="Train a learned policy by REINFORCE on instances drawn fresh "
-                       "from the generator; writes CKPT, CKPT.json, CKPT.train.csv and the resume "
-                       "state CKPT.state.pt (see solvers/train.py).")
-    p.add_argument("--model", choices=("drl", "am"), default="drl",
-                   help="drl: the paper's Seq2Seq policy; am: attention model (default: drl)")
-    p.add_argument("--clusters", "-k", type=_int, default=4, metavar="K", help="K (default: 4)")
-    p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N", help="N (default: 20)")
-    p.add_argument("--steps", type=_int, default=40_000, help="training steps (default: 40000)")
-    p.add_argument("--batch", type=_int, default=256, help="instances per step (default: 256)")
-    p.add_argument("--lr", type=_float, default=1e-4, help="Adam learning rate (default: 1e-4)")
-    p.add_argument("--seed", type=_seed, default=0, help="random seed (default: 0)")
-    p.add_argument("--omega", "-w", type=_float, default=None, metavar="W",
-                   help="train for one omega (default: omega uniform in [0, 1] per instance)")
-    p.add_argument("--heads", choices=("paper", "optimal"), default=None,
-                   help="head rule in the reward (default: paper for drl, optimal for am)")
-    p.add_argument("--glimpse", choices=("all", "unvisited"), default=None,
+                       "from the generator, by a named recipe (solvers/learned/recipes.py): drl "
+                       "(the shipped drl model's), drl-paper (the paper's plain pointer and "
+                       "Algorithm 1), am (the shipped attention model's). Every setting defaults "
+                       "to the recipe's; a switch overrides it. Writes CKPT, CKPT.json (with the "
+                       "command that repeats the run), CKPT.train.csv and the resume state "
+                       "CKPT.state.pt.")
+    off = argparse.SUPPRESS  # a switch not given is not in the namespace: the recipe decides
+    p.add_argument("--model", default=None, metavar="RECIPE",
+                   help="training recipe: drl, drl-paper or am (default: drl)")
+    p.add_argument("--clusters", "-k", type=_int, default=off, metavar="K", help="training K")
+    p.add_argument("--nodes", "-n", type=_int, default=off, metavar="N", help="nodes per cluster")
+    p.add_argument("--steps", type=_int, default=off, help="training steps")
+    p.add_argument("--batch", type=_int, default=off, help="instances per step")
+    p.add_argument("--lr", type=_float, default=off, help="Adam learning rate")
+    p.add_argument("--seed", type=_seed, default=off, help="random seed")
+    p.add_argument("--omega", "-w", type=_float_or_none, default=off, metavar="W",
+                   help="train for one omega, or 'none': omega uniform in [0, 1] per instance")
+    p.add_argument("--heads", choices=("paper", "optimal"), default=off,
+                   help="head rule in the reward and validation")
+    p.add_argument("--glimpse", choices=("all", "unvisited"), default=off,
                    help="drl: elements the decoder's glimpse attends to: every element (the "
-                   "paper's eq. u_k), or only the unvisited ones (default: unvisited, which "
-                   "generalises better to larger K)")
-    p.add_argument("--local", action=argparse.BooleanOptionalAction, default=None,
+                   "paper's eq. u_k), or only the unvisited ones (generalises better to larger K)")
+    p.add_argument("--local", action=argparse.BooleanOptionalAction, default=off,
                    help="drl: add a learned term of the distances from the UAV's location and to "
-                   "the base station to the pointer's logits (default: on; --no-local --no-energy "
-                   "--no-direction --glimpse all is the paper's plain pointer and training)")
-    p.add_argument("--energy", action=argparse.BooleanOptionalAction, default=None,
+                   "the base station to the pointer's logits (--no-local drops --energy too)")
+    p.add_argument("--energy", action=argparse.BooleanOptionalAction, default=off,
                    help="drl with --local: also feed it the paper rule's energy of entering each "
-                   "cluster and where that head is (default: on with --local)")
-    p.add_argument("--direction", action=argparse.BooleanOptionalAction, default=None,
+                   "cluster and where that head is")
+    p.add_argument("--direction", action=argparse.BooleanOptionalAction, default=off,
                    help="drl: also price each sampled tour flown backwards and move the odds of "
-                   "its first step toward the cheaper direction (default: on)")
-    p.add_argument("--val-every", type=_int, default=250, metavar="S",
-                   help="validate and checkpoint every S steps (default: 250)")
-    p.add_argument("--val-size", type=_int, default=512, metavar="M",
-                   help="validation instances (default: 512)")
-    p.add_argument("--threads", type=_int, default=1, help="torch threads (default: 1)")
-    p.add_argument("--max-time", type=_float, default=None, metavar="S",
-                   help="stop after S seconds of training wall time")
-    p.add_argument("--keep", choices=("best", "last"), default="best",
-                   help="policy kept in CKPT: best validation energy or the last (default: best)")
+                   "its first step toward the cheaper direction")
+    p.add_argument("--val-every", type=_int, default=off, metavar="S",
+                   help="validate and checkpoint every S steps")
+    p.add_argument("--val-size", type=_int, default=off, metavar="M", help="validation instances")
+    p.add_argument("--threads", type=_int, default=off, help="torch threads")
+    p.add_argument("--max-time", type=_float_or_none, default=off, metavar="S",
+                   help="stop after S seconds of training wall time ('none': after --steps)")
+    p.add_argument("--keep", choices=("best", "last"), default=off,
+                   help="policy kept in CKPT: best validation energy or the last")
     p.add_argument("--resume", action="store_true", help="continue from CKPT.state.pt")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("-o", "--output", required=True, metavar="CKPT.pt", help="policy file to write")
@@ -276,39 +285,53 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _train_recipe(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
-    """drl's model options and whether to train with the direction term; the defaults are the
-    shipped model's recipe (am: no options)."""
-    if args.model != "drl":
-        for flag, value in (("--glimpse", args.glimpse), ("--local", args.local),
-                            ("--energy", args.energy), ("--direction", args.direction)):
-            if value is not None:
-                raise InputError(f"{flag} is an option of the drl model only")
-        return {}, False
-    options: dict[str, Any] = {"glimpse": args.glimpse or "unvisited"}
-    local = args.local is not False
-    if args.energy and not local:
-        raise InputError("--energy adds features to the --local term: drop --no-local")
-    if local:
+#: ``gtsp-bench train`` switches that set a training setting of the same name.
+_TRAIN_FIELDS = ("clusters", "nodes", "steps", "batch", "lr", "seed", "omega", "heads", "val_every",
+                 "val_size", "threads", "max_time", "keep", "direction")
+_DRL_SWITCHES = ("glimpse", "local", "energy", "direction")
+
+
+def train_config(args: argparse.Namespace) -> TrainConfig:
+    """The training settings of a parsed ``gtsp-bench train`` command: the recipe named by
+    ``--model``, with the switches given changed (a
+    :class:`~gtsp_bench.solvers.learned.recipes.TrainConfig`)."""
+    import math
+
+    from gtsp_bench.solvers.learned.recipes import DEFAULT_RECIPE, get_recipe
+
+    given = vars(args)
+    base = get_recipe(args.model or DEFAULT_RECIPE)
+    if base.model != "drl":
+        for name in _DRL_SWITCHES:
+            if name in given:
+                raise InputError(f"--{name} is an option of the drl model only")
+    overrides: dict[str, Any] = {k: given[k] for k in _TRAIN_FIELDS if k in given}
+    if "val_every" in given:
+        overrides["log_every"] = math.gcd(given["val_every"], base.log_every)
+    options = dict(base.model_options)
+    if "glimpse" in given:
+        options["glimpse"] = given["glimpse"]
+    if given.get("local") is True:
         options["local"] = True
-        if args.energy is not False:
-            options["energy"] = True
-    return options, args.direction is not False
+    elif given.get("local") is False:
+        options.pop("local", None)
+        options.pop("energy", None)
+    if given.get("energy") is True:
+        if not options.get("local"):
+            raise InputError("--energy adds features to the --local term: "
+                             + ("drop --no-local" if "local" in given else "add --local"))
+        options["energy"] = True
+    elif given.get("energy") is False:
+        options.pop("energy", None)
+    if options != base.model_options:
+        overrides["model_options"] = options
+    return get_recipe(base.recipe, **overrides)
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
-    import math
+    from gtsp_bench.solvers.learned.train import train
 
-    from gtsp_bench.solvers.learned.train import TrainConfig, train
-
-    options, direction = _train_recipe(args)
-    cfg = TrainConfig(model=args.model, clusters=args.clusters, nodes=args.nodes,
-                      steps=args.steps, batch=args.batch, lr=args.lr, seed=args.seed,
-                      omega=args.omega, heads=args.heads, val_every=args.val_every,
-                      val_size=args.val_size, log_every=math.gcd(args.val_every, 50),
-                      threads=args.threads, max_time=args.max_time, keep=args.keep,
-                      direction=direction, model_options=options)
-    meta = train(cfg, args.output, resume=args.resume, progress=not args.no_progress)
+    meta = train(train_config(args), args.output, resume=args.resume, progress=not args.no_progress)
     print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
           f"validation energy {meta['val_energy']:.2f} J, {meta['wall_s']:.0f} s", file=sys.stderr)
     return 0

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from gtsp_bench.checks import check_float, check_int, default_time_limit
+from gtsp_bench.checks import check_float, check_int, check_mapping, default_time_limit
 from gtsp_bench.errors import InputError
 
 
@@ -36,3 +36,13 @@ def test_default_time_limit():
     assert default_time_limit(1) == 1.0
     assert default_time_limit(20) == 10.0
     assert default_time_limit(1000) == 60.0
+
+
+def test_check_mapping():
+    """A mapping comes back as a dict of its own (a copy); anything else fails."""
+    options = {"dim": 16}
+    copy = check_mapping("opts", options)
+    assert copy == options and copy is not options
+    for bad in (None, "dim", [("dim", 16)]):
+        with pytest.raises(InputError, match="opts must be a mapping"):
+            check_mapping("opts", bad)

@@ -1,31 +1,20 @@
-"""The paper's Seq2Seq policy: feasible decoding, masking, the drl solvers and the shipped model."""
+"""The paper's Seq2Seq policy: feasible decoding, masking, forced scoring, and its options."""
 
 from __future__ import annotations
 
 import itertools
-import json
 
 import numpy as np
 import pytest
 
 torch = pytest.importorskip("torch")
 
+from gtsp_bench.solvers.learned.checkpoint import save_policy  # noqa: E402
 from gtsp_bench.solvers.learned.drl import PointerPolicy  # noqa: E402
-from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR, make_env, save_policy  # noqa: E402
+from gtsp_bench.solvers.learned.env import make_env  # noqa: E402
 
-from gtsp_bench.cli import main  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
-from gtsp_bench.generator import generate_batch, generate_instance  # noqa: E402
-from gtsp_bench.registry import get_solver, run_solver  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def tiny_ckpt(tmp_path_factory):
-    """An untrained tiny drl policy file for N = 5."""
-    torch.manual_seed(1)
-    path = tmp_path_factory.mktemp("drl") / "tiny.pt"
-    save_policy(PointerPolicy(n_nodes=5, dim=16), path)
-    return path
+from gtsp_bench.generator import generate_batch  # noqa: E402
 
 
 @pytest.mark.parametrize("options", [{"glimpse": "all"}, {"glimpse": "unvisited"},
@@ -110,7 +99,7 @@ def test_unvisited_glimpse_gives_visited_elements_zero_weight():
 
 def test_glimpse_option_is_saved_and_checked(tmp_path):
     """The glimpse setting round-trips through a policy file; a bad one is a clear InputError."""
-    from gtsp_bench.solvers.learned.rl_common import load_policy
+    from gtsp_bench.solvers.learned.checkpoint import load_policy
 
     path = tmp_path / "g.pt"
     save_policy(PointerPolicy(n_nodes=3, dim=8, glimpse="unvisited"), path)
@@ -118,7 +107,7 @@ def test_glimpse_option_is_saved_and_checked(tmp_path):
     save_policy(PointerPolicy(n_nodes=3, dim=8), path)  # files without the key: glimpse over all
     assert "glimpse" not in load_policy(path, "drl").config
     assert not load_policy(path, "drl").mask_glimpse
-    with pytest.raises(InputError, match="glimpse must be one of all, unvisited"):
+    with pytest.raises(InputError, match="glimpse must be one of 'all', 'unvisited'"):
         PointerPolicy(n_nodes=3, dim=8, glimpse="some")
 
 
@@ -127,7 +116,7 @@ def test_local_term_reads_the_uav_location_of_the_paper_rule():
     output layer zero it decodes as the model without it; otherwise the probabilities change, and
     the distances it is fed are those from the heads the paper's rule picks along the decoded
     order (the depot first), recorded through a hook."""
-    from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, paper_heads
+    from gtsp_bench.solvers.learned.env import AREA_SCALE, paper_heads
 
     b, k = 64, 6
     env = make_env(generate_batch(np.random.default_rng(7), b, k, 5), np.linspace(0, 1, b))
@@ -161,7 +150,7 @@ def test_local_term_reads_the_uav_location_of_the_paper_rule():
 
 def test_local_option_is_saved_and_checked(tmp_path):
     """The local setting round-trips through a policy file; a non-bool is a clear InputError."""
-    from gtsp_bench.solvers.learned.rl_common import load_policy
+    from gtsp_bench.solvers.learned.checkpoint import load_policy
 
     path = tmp_path / "l.pt"
     save_policy(PointerPolicy(n_nodes=3, dim=8, local=True), path)
@@ -176,7 +165,7 @@ def test_damp_leaves_the_training_k_alone_and_weights_the_pointer_beyond_it():
     """damp = D scales the pointer's logits by min(1, D / clusters left): up to D clusters the
     policy is exactly the undamped one; with more, the first step's probabilities are those of
     pointer * D / K + local term (checked against a hand computation); damp needs local."""
-    from gtsp_bench.solvers.learned.rl_common import CLIP
+    from gtsp_bench.solvers.learned.decoding import CLIP
 
     torch.manual_seed(5)
     plain = PointerPolicy(n_nodes=5, dim=16, glimpse="unvisited", local=True)
@@ -214,7 +203,7 @@ def test_energy_features_are_the_paper_rules_next_step():
     """energy=True feeds, per cluster, the energy the paper's rule pays to enter it from the UAV's
     location (kJ) and the distance from the head it picks to the depot: the same as one step of
     paper_head_step, priced by hand; the depot's column is 0; energy needs local."""
-    from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, paper_head_step
+    from gtsp_bench.solvers.learned.env import AREA_SCALE, paper_head_step
 
     b, k = 16, 5
     env = make_env(generate_batch(np.random.default_rng(1), b, k, 6), np.linspace(0, 1, b))
@@ -230,77 +219,3 @@ def test_energy_features_are_the_paper_rules_next_step():
         assert torch.allclose(back[:, c + 1], (xy - env.depot).pow(2).sum(-1).sqrt() / AREA_SCALE)
     with pytest.raises(InputError, match="energy needs the local term"):
         PointerPolicy(n_nodes=3, dim=8, energy=True)
-
-
-def test_drl_solvers_feasible_and_sampling_not_worse(tiny_ckpt):
-    """drl and drl-sample pass the harness; sampling keeps the greedy tour, so it is never worse."""
-    inst = generate_instance(5, 5, seed=2)
-    for heads in ("paper", "optimal"):
-        greedy = run_solver(get_solver("drl", checkpoint=str(tiny_ckpt), heads=heads), inst, 0.3)
-        sample = run_solver(get_solver("drl-sample", checkpoint=str(tiny_ckpt), heads=heads,
-                                       samples=16), inst, 0.3, seed=4)
-        again = run_solver(get_solver("drl-sample", checkpoint=str(tiny_ckpt), heads=heads,
-                                      samples=16), inst, 0.3, seed=4)
-        assert sample.objective <= greedy.objective + 1e-9
-        assert again.objective == sample.objective and again.order == sample.order
-    paper = run_solver(get_solver("drl", checkpoint=str(tiny_ckpt)), inst, 0.3)
-    optimal = run_solver(get_solver("drl", checkpoint=str(tiny_ckpt), heads="optimal"), inst, 0.3)
-    assert paper.order == optimal.order and optimal.objective <= paper.objective + 1e-9
-
-
-def test_reverse_keeps_the_better_direction():
-    """reverse=true: with the paper's heads the tour is the decoded one or its reverse, whichever
-    the evaluator prices lower (never worse; better on some of 40 instances with the shipped
-    model); with optimal heads both directions cost the same, so the objective is unchanged."""
-    from gtsp_bench.generator import instance_set
-
-    insts = instance_set(40, 6, 77)
-    plain = get_solver("drl").solve_batch(insts, [0.4] * 40)
-    rev = get_solver("drl", reverse=True).solve_batch(insts, [0.4] * 40)
-    better = 0
-    for inst, a, b in zip(insts, plain, rev, strict=True):
-        assert b.order in (a.order, a.order[::-1])
-        back = run_solver(get_solver("drl", reverse=True), inst, 0.4)
-        assert back.objective == pytest.approx(b.objective, rel=1e-12)
-        assert b.objective <= a.objective + 1e-9
-        better += b.objective < a.objective - 1e-9
-    assert better >= 1
-    opt = get_solver("drl", heads="optimal").solve_batch(insts, [0.4] * 40)
-    opt_rev = get_solver("drl", heads="optimal", reverse=True).solve_batch(insts, [0.4] * 40)
-    assert [s.objective for s in opt] == pytest.approx([s.objective for s in opt_rev], rel=1e-9)
-    with pytest.raises(InputError, match="reverse must be true or false"):
-        get_solver("drl", reverse="yes")
-
-
-def test_bad_options_and_wrong_cluster_size(tiny_ckpt):
-    """Bad options and a cluster size the model was not built for raise InputError."""
-    with pytest.raises(InputError, match="heads must be one of"):
-        get_solver("drl", heads="best")
-    with pytest.raises(InputError, match="samples must be an integer"):
-        get_solver("drl-sample", samples=-1)
-    with pytest.raises(InputError, match="trained on clusters of 5 nodes"):
-        run_solver(get_solver("drl", checkpoint=str(tiny_ckpt)), generate_instance(3, 6, seed=0), 0.5)
-
-
-def test_shipped_checkpoint_solves_from_the_cli(tmp_path, capsys):
-    """The committed drl model (and its JSON record) solves a fresh instance via the CLI."""
-    meta = json.loads((CHECKPOINT_DIR / "drl.json").read_text())
-    assert meta["model"] == "drl" and meta["config"]["n_nodes"] == 20 and meta["steps"] > 0
-    inst = tmp_path / "k6.json"
-    assert main(["generate", "-k", "6", "--seed", "3", "-o", str(inst)]) == 0
-    capsys.readouterr()
-    assert main(["solve", str(inst), "-s", "drl", "-w", "0.3", "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
-    assert sorted(data["order"]) == list(range(6)) and data["solver"] == "drl"
-
-
-def test_cli_checkpoint_param_error_is_one_line(tmp_path, capsys):
-    """solve -p checkpoint=BAD exits 2 with one line naming the file."""
-    bad = tmp_path / "bad.pt"
-    bad.write_bytes(b"\x00garbage")
-    inst = tmp_path / "k3.json"
-    assert main(["generate", "-k", "3", "-o", str(inst)]) == 0
-    capsys.readouterr()
-    assert main(["solve", str(inst), "-s", "drl", "-p", f"checkpoint={bad}"]) == 2
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and str(bad) in err

@@ -133,7 +133,7 @@ def test_solver_revision_is_the_learned_checkpoints_hash():
     """drl's revision is a hash of its shipped weights; a solver without one has ""."""
     import hashlib
 
-    from gtsp_bench.solvers.learned.rl_common import CHECKPOINT_DIR
+    from gtsp_bench.solvers.learned.checkpoint import CHECKPOINT_DIR
 
     from gtsp_bench.registry import solver_revision
 

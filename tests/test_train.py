@@ -14,8 +14,9 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from gtsp_bench.solvers.learned.rl_common import load_policy  # noqa: E402
-from gtsp_bench.solvers.learned.train import TrainConfig, Trainer, output_paths, train  # noqa: E402
+from gtsp_bench.solvers.learned.checkpoint import load_policy  # noqa: E402
+from gtsp_bench.solvers.learned.recipes import TrainConfig, get_recipe  # noqa: E402
+from gtsp_bench.solvers.learned.train import Trainer, output_paths, policy_config, train  # noqa: E402
 
 from gtsp_bench.cli import main  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
@@ -24,9 +25,13 @@ from .conftest import REPO  # noqa: E402
 
 
 def _cfg(model: str = "drl", steps: int = 6, **kw) -> TrainConfig:
+    """A tiny run of the paper's plain drl recipe, or of the am recipe."""
     options = {"dim": 16} if model == "drl" else {"dim": 16, "n_heads": 2, "n_layers": 1, "ff": 32}
-    return TrainConfig(model=model, clusters=3, nodes=4, steps=steps, batch=16, lr=1e-3, seed=7,
-                       val_every=2, val_size=8, log_every=1, model_options=options, **kw)
+    recipe = "drl-paper" if model == "drl" else model
+    settings = {"clusters": 3, "nodes": 4, "steps": steps, "batch": 16, "lr": 1e-3, "seed": 7,
+                "val_every": 2, "val_size": 8, "log_every": 1, "max_time": None, "keep": "best",
+                "model_options": options, **kw}
+    return get_recipe(recipe, **settings)
 
 
 def _rows(path) -> list[dict]:
@@ -61,7 +66,7 @@ def test_direction_term_moves_the_odds_toward_the_cheaper_direction(tmp_path):
     log-probability of a tour's first step; a gradient step on it alone raises the log-odds of
     the cheaper direction (weighted by the cost gap), and pairs that cost the same give it no
     gradient."""
-    from gtsp_bench.solvers.learned.rl_common import COST_SCALE, choose_heads, tour_cost
+    from gtsp_bench.solvers.learned.env import COST_SCALE, choose_heads, tour_cost
 
     trainer = Trainer(_cfg(direction=True), tmp_path / "p.pt")
     env = trainer.batch_env()
@@ -212,3 +217,29 @@ def test_cli_train_defaults_are_the_shipped_recipe_and_recorded(tmp_path, capsys
     assert meta["train"]["direction"] is False
     assert "--glimpse all --no-local --no-direction" in meta["command"]
     assert load_policy(plain, "drl").local is None
+
+
+def test_policy_config_fills_the_training_shape():
+    """drl's policy gets n_nodes = N and, with the local term, damp = the training K unless the
+    options give them; am's options pass through unchanged."""
+    assert policy_config(get_recipe("drl", clusters=5, nodes=7)) == {
+        "model": "drl", "glimpse": "unvisited", "local": True, "energy": True, "n_nodes": 7, "damp": 5}
+    assert policy_config(get_recipe("drl-paper", nodes=7)) == {"model": "drl", "glimpse": "all", "n_nodes": 7}
+    custom = get_recipe("drl", model_options={"local": True, "damp": 2, "n_nodes": 9})
+    assert policy_config(custom) == {"model": "drl", "local": True, "damp": 2, "n_nodes": 9}
+    assert policy_config(get_recipe("am", model_options={"dim": 16})) == {"model": "am", "dim": 16}
+
+
+@pytest.mark.parametrize("model", ["drl", "am"])
+def test_the_baseline_gets_its_own_optimiser(tmp_path, model):
+    """drl (critic baseline): one Adam over the actor's parameters, one over the critic's, which
+    together are every parameter once; am (POMO, nothing to learn): one Adam over everything."""
+    trainer = Trainer(_cfg(model), tmp_path / "m.pt")
+    groups = [[id(p) for g in opt.param_groups for p in g["params"]] for opt in trainer.optims]
+    every = [id(p) for p in trainer.model.parameters()]
+    assert sorted(i for group in groups for i in group) == sorted(every)
+    if model == "drl":
+        assert len(groups) == 2
+        assert groups[1] == [id(p) for p in trainer.model.critic.parameters()]
+    else:
+        assert len(groups) == 1

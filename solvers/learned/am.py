@@ -17,7 +17,8 @@ import math
 from typing import Any
 
 import torch
-from gtsp_bench.solvers.learned.rl_common import AREA_SCALE, EnvBatch, LearnedSolver, choose, element_features
+from gtsp_bench.solvers.learned.decoding import choose
+from gtsp_bench.solvers.learned.env import AREA_SCALE, EnvBatch, element_features
 from torch import nn
 
 
@@ -38,6 +39,9 @@ class AttentionPolicy(nn.Module):
         Add a learned bias f(d(last, j), d(j, depot)) of centroid distances to the logits: a
         nearest-neighbour-like prior that does not depend on K (it helps K-generalisation).
     """
+
+    #: Training baselines it supports (:mod:`gtsp_bench.solvers.learned.baselines`).
+    baselines = ("pomo",)
 
     def __init__(self, dim: int = 128, n_heads: int = 8, n_layers: int = 3, ff: int = 512,
                  local: bool = True) -> None:
@@ -114,16 +118,3 @@ class AttentionPolicy(nn.Module):
             logp = logp + step_logp
             actions.append(act)
         return torch.stack(actions, 1) - 1, logp
-
-
-class AM(LearnedSolver):
-    """Attention model: the best of its K greedy tours (POMO starts), optimal heads by default.
-
-    Default checkpoint: ``solvers/learned/checkpoints/am.pt``. Options: ``checkpoint``, ``heads``
-    (``optimal`` | ``paper``), ``samples`` (extra sampled tours per start, default 0),
-    ``augment`` (also decode the mirrored instance, default false), ``reverse`` (also price each
-    tour backwards; matters with the paper's heads only), ``threads``.
-    """
-
-    model_name = "am"
-    default_heads = "optimal"

@@ -26,19 +26,18 @@ import math
 from typing import Any
 
 import torch
-from gtsp_bench.solvers.learned.rl_common import (
+from gtsp_bench.solvers.learned.decoding import choose, step_logprobs
+from gtsp_bench.solvers.learned.env import (
     AREA_SCALE,
     COST_SCALE,
     EnvBatch,
-    LearnedSolver,
-    choose,
     element_features,
     paper_head_step,
     rule_entry,
-    step_logprobs,
 )
 from torch import nn
 
+from gtsp_bench.checks import check_bool, check_choice, check_int
 from gtsp_bench.errors import InputError
 
 #: Elements the glimpse attends to: all of C (as eq. "u_k" reads) or the unvisited ones only.
@@ -82,7 +81,8 @@ class Critic(nn.Module):
 
 
 class PointerPolicy(nn.Module):
-    """The paper's Seq2Seq actor (and its critic, used only in training).
+    """The paper's Seq2Seq actor (and its critic, used only in training, by the ``critic``
+    baseline; its weights are part of the policy file).
 
     Parameters
     ----------
@@ -112,24 +112,23 @@ class PointerPolicy(nn.Module):
         the distance from the head that rule would pick there to the depot.
     """
 
+    #: Training baselines it supports (:mod:`gtsp_bench.solvers.learned.baselines`).
+    baselines = ("critic",)
+
     def __init__(self, n_nodes: int = 20, dim: int = 128, glimpse: str = "all",
                  local: bool = False, damp: int = 0, energy: bool = False) -> None:
         super().__init__()
-        if glimpse not in GLIMPSES:
-            raise InputError(f"drl glimpse must be one of {', '.join(GLIMPSES)}, got {glimpse!r}")
-        if not isinstance(local, bool):
-            raise InputError(f"drl local must be true or false, got {local!r}")
+        check_choice("drl glimpse", glimpse, GLIMPSES)
+        check_bool("drl local", local)
+        damp = check_int("drl damp", damp, 0)
+        check_bool("drl energy", energy)
+        if damp and not local:
+            raise InputError("drl damp needs the local term (local=True)")
+        if energy and not local:
+            raise InputError("drl energy needs the local term (local=True)")
         self.config: dict[str, Any] = {"model": "drl", "n_nodes": n_nodes, "dim": dim}
         if glimpse != "all":
             self.config["glimpse"] = glimpse
-        if isinstance(damp, bool) or not isinstance(damp, int) or damp < 0:
-            raise InputError(f"drl damp must be an integer >= 0, got {damp!r}")
-        if damp and not local:
-            raise InputError("drl damp needs the local term (local=True)")
-        if not isinstance(energy, bool):
-            raise InputError(f"drl energy must be true or false, got {energy!r}")
-        if energy and not local:
-            raise InputError("drl energy needs the local term (local=True)")
         if local:
             self.config["local"] = True
         if damp:
@@ -247,30 +246,3 @@ class PointerPolicy(nn.Module):
         back = (xy - env.depot[:, None]).pow(2).sum(-1).sqrt() / AREA_SCALE
         zero = enter.new_zeros((b, 1))
         return [torch.cat([zero, enter / COST_SCALE], 1), torch.cat([zero, back], 1)]
-
-
-class DRL(LearnedSolver):
-    """The paper's policy, greedy decoding; heads by the paper's rule (default) or optimal.
-
-    Default checkpoint: ``solvers/learned/checkpoints/drl.pt``. Options: ``checkpoint``, ``heads``
-    (``paper`` | ``optimal``), ``threads``, ``reverse`` (also fly the decoded tour backwards and
-    keep the better direction under the head rule; default false, as the paper).
-    """
-
-    model_name = "drl"
-    default_heads = "paper"
-
-    def __init__(self, checkpoint: str | None = None, heads: str | None = None, threads: int = 1,
-                 reverse: bool = False) -> None:
-        super().__init__(checkpoint, heads, samples=0, threads=threads, reverse=reverse)
-
-
-class DRLSample(LearnedSolver):
-    """The paper's policy: the best of the greedy tour and ``samples`` sampled tours (default 64)."""
-
-    model_name = "drl"
-    default_heads = "paper"
-
-    def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 64,
-                 threads: int = 1, reverse: bool = False) -> None:
-        super().__init__(checkpoint, heads, samples=samples, threads=threads, reverse=reverse)

@@ -1,11 +1,17 @@
-"""Training loop of the learned policies (paper Algorithm 1, and POMO for ``am``).
+"""The training loop of the learned policies: REINFORCE (paper Algorithm 1) with a baseline.
 
-``drl``: REINFORCE with the critic baseline, one Adam per network (lr 1e-4), as the paper;
-``direction`` (beyond the paper) adds a term that prices each sampled tour flown backwards too
-and moves the odds of its first step toward the cheaper direction.
-``am``: REINFORCE with the POMO shared baseline (the mean cost of an instance's K tours).
-Data are drawn fresh each step from :func:`gtsp_bench.generator.generate_batch`, omega uniform in
-[0, 1] per instance unless fixed, and priced by the shared evaluator's quantities.
+What to train comes from a :class:`~gtsp_bench.solvers.learned.recipes.TrainConfig` (a named
+recipe, :func:`~gtsp_bench.solvers.learned.recipes.get_recipe`): the policy, its baseline
+(:mod:`~gtsp_bench.solvers.learned.baselines`: the paper's critic, or POMO's shared mean), the
+head rule of the reward, and ``direction`` (beyond the paper: a term that prices each sampled
+tour flown backwards too and moves the odds of its first step toward the cheaper direction).
+The actor gets one Adam, a learning baseline another, as the paper. Data are drawn fresh each
+step from :func:`gtsp_bench.generator.generate_batch`, omega uniform in [0, 1] per instance
+unless fixed, and priced by the shared evaluator's quantities.
+
+    from gtsp_bench.solvers.learned.recipes import get_recipe
+    from gtsp_bench.solvers.learned.train import train
+    train(get_recipe("drl", seed=3), "my_drl.pt")    # = gtsp-bench train --model drl --seed 3
 
 Given ``-o CKPT`` (e.g. ``drl.pt``), training writes, atomically:
 
@@ -28,32 +34,23 @@ import io
 import json
 import math
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
-from gtsp_bench.solvers.learned.rl_common import (
-    COST_SCALE,
-    HEAD_RULES,
-    EnvBatch,
-    build_model,
-    choose_heads,
-    exact_by_enumeration,
-    make_env,
-    save_policy,
-    tour_cost,
-)
+from gtsp_bench.solvers.learned.baselines import get_baseline
+from gtsp_bench.solvers.learned.checkpoint import save_policy
+from gtsp_bench.solvers.learned.env import COST_SCALE, EnvBatch, choose_heads, make_env, tour_cost
+from gtsp_bench.solvers.learned.oracles import exact_by_enumeration
+from gtsp_bench.solvers.learned.policies import build_policy
+from gtsp_bench.solvers.learned.recipes import TrainConfig
 from torch import nn
 
-from gtsp_bench.checks import check_float, check_int, check_omega
 from gtsp_bench.errors import InputError
-from gtsp_bench.generator import check_generator_args, generate_batch
+from gtsp_bench.generator import generate_batch
 from gtsp_bench.io import atomic_write_bytes, atomic_write_text
 
-MODELS = ("drl", "am")
-DEFAULT_HEADS = {"drl": "paper", "am": "optimal"}
 #: Seed of the fixed validation set (never used for training or testing).
 VAL_SEED = 918_273
 #: Validation sets up to this K also get the exact optimum (by enumeration) and a gap column.
@@ -61,81 +58,16 @@ MAX_EXACT_K = 6
 LOG_COLUMNS = ("step", "loss", "reward", "val_energy", "wall_s", "val_gap_pct", "critic_loss")
 
 
-@dataclass(frozen=True)
-class TrainConfig:
-    """Settings of one training run (all are recorded in the JSON beside the checkpoint)."""
-
-    model: str = "drl"
-    clusters: int = 4
-    nodes: int = 20
-    steps: int = 40_000
-    batch: int = 256
-    lr: float = 1e-4
-    seed: int = 0
-    omega: float | None = None
-    heads: str | None = None
-    val_every: int = 250
-    val_size: int = 512
-    log_every: int = 50
-    threads: int = 1
-    max_time: float | None = None
-    grad_clip: float = 1.0
-    keep: str = "best"
-    direction: bool = False
-    model_options: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        if self.model not in MODELS:
-            raise InputError(f"unknown model {self.model!r} (valid: {', '.join(MODELS)})")
-        check_generator_args(self.clusters, self.nodes, 50.0, 1000.0)
-        if self.clusters < 2:
-            raise InputError("training needs at least 2 clusters")
-        for name in ("steps", "batch", "val_every", "val_size", "log_every", "threads"):
-            check_int(name, getattr(self, name), 1)
-        check_float("learning rate", self.lr, 0.0, math.inf)
-        if self.omega is not None:
-            check_omega(self.omega)
-        if self.heads is not None and self.heads not in HEAD_RULES:
-            raise InputError(f"heads must be one of {', '.join(HEAD_RULES)}, got {self.heads!r}")
-        if self.max_time is not None and not self.max_time > 0:
-            raise InputError(f"max time must be > 0 seconds, got {self.max_time!r}")
-        if self.keep not in ("best", "last"):
-            raise InputError(f"keep must be 'best' or 'last', got {self.keep!r}")
-        if self.direction and self.model != "drl":
-            raise InputError("--direction is a training option of the drl model only")
-        if self.val_every % self.log_every:
-            raise InputError("val_every must be a multiple of log_every")
-
-    @property
-    def head_rule(self) -> str:
-        """The head rule used for rewards and validation."""
-        return self.heads or DEFAULT_HEADS[self.model]
-
-    def command(self, output: str | Path) -> str:
-        """The ``gtsp-bench train`` command line that reproduces this run."""
-        parts = ["gtsp-bench train", f"--model {self.model}", f"--clusters {self.clusters}",
-                 f"--nodes {self.nodes}", f"--steps {self.steps}", f"--batch {self.batch}",
-                 f"--lr {self.lr:g}", f"--seed {self.seed}", f"--heads {self.head_rule}",
-                 f"--threads {self.threads}", f"--keep {self.keep}"]
-        if self.model == "drl":  # every switch spelled out: the CLI's defaults may change
-            opts = self.model_options
-            parts.append(f"--glimpse {opts.get('glimpse', 'all')}")
-            parts.append("--local" if opts.get("local") else "--no-local")
-            if opts.get("local"):
-                parts.append("--energy" if opts.get("energy") else "--no-energy")
-            parts.append("--direction" if self.direction else "--no-direction")
-        if self.omega is not None:
-            parts.append(f"--omega {self.omega:g}")
-        if self.max_time is not None:
-            parts.append(f"--max-time {self.max_time:g}")
-        return " ".join(parts) + f" -o {output}"
-
-    def identity(self) -> dict[str, Any]:
-        """Settings that a resumed run must share with the run it continues."""
-        d = dataclasses.asdict(self)
-        for k in ("steps", "max_time", "threads", "keep"):
-            d.pop(k)
-        return d
+def policy_config(cfg: TrainConfig) -> dict[str, Any]:
+    """The config of the policy ``cfg`` trains: its ``model_options``, and for drl the cluster
+    size ``n_nodes`` = ``nodes`` and, with the local term, ``damp`` = the training K (the pointer
+    is damped only beyond it), unless the options give them."""
+    options = dict(cfg.model_options)
+    if cfg.model == "drl":
+        options.setdefault("n_nodes", cfg.nodes)
+        if options.get("local"):
+            options.setdefault("damp", cfg.clusters)
+    return {"model": cfg.model, **options}
 
 
 def output_paths(ckpt: str | Path) -> dict[str, Path]:
@@ -179,18 +111,14 @@ class Trainer:
             raise InputError(f"{output}: the policy file must end in .pt")
         torch.set_num_threads(cfg.threads)
         torch.manual_seed(cfg.seed)
-        options = dict(cfg.model_options)
-        if cfg.model == "drl":
-            options.setdefault("n_nodes", cfg.nodes)
-            if options.get("local"):  # the pointer is damped only beyond the training K
-                options.setdefault("damp", cfg.clusters)
-        self.model = build_model({"model": cfg.model, **options})
-        if cfg.model == "drl":
-            actor = [p for n, p in self.model.named_parameters() if not n.startswith("critic.")]
-            self.optims = [torch.optim.Adam(actor, lr=cfg.lr),
-                           torch.optim.Adam(self.model.critic.parameters(), lr=cfg.lr)]
-        else:
-            self.optims = [torch.optim.Adam(self.model.parameters(), lr=cfg.lr)]
+        self.model = build_policy(policy_config(cfg))
+        self.baseline = get_baseline(cfg.baseline, self.model)
+        own = self.baseline.parameters()
+        own_ids = {id(p) for p in own}
+        actor = [p for p in self.model.parameters() if id(p) not in own_ids]
+        self.optims = [torch.optim.Adam(actor, lr=cfg.lr)]
+        if own:
+            self.optims.append(torch.optim.Adam(own, lr=cfg.lr))
         self.rng = np.random.default_rng([cfg.seed, 1])
         self.gen = torch.Generator().manual_seed(cfg.seed)
         self.step = 0
@@ -261,7 +189,7 @@ class Trainer:
             "validation": {"seed": VAL_SEED, "instances": self.cfg.val_size,
                            "clusters": self.cfg.clusters, "nodes": self.cfg.nodes,
                            "omega": self.cfg.omega if self.cfg.omega is not None else "linspace(0, 1)",
-                           "decoding": "greedy", "heads": self.cfg.head_rule},
+                           "decoding": "greedy", "heads": self.cfg.heads},
             "config": self.model.config,
             "train": dataclasses.asdict(self.cfg),
             "torch": torch.__version__,
@@ -277,7 +205,7 @@ class Trainer:
         return make_env(coords, omega)
 
     def train_step(self) -> tuple[float, float, float]:
-        """One gradient step; returns (actor loss, mean reward in J, critic loss or NaN)."""
+        """One gradient step; returns (actor loss, mean reward in J, baseline loss or NaN)."""
         env = self.batch_env()
         self.model.train()
         if self.cfg.direction:  # the first step's distribution comes with the sample
@@ -286,27 +214,21 @@ class Trainer:
             order, logp = self.model.decode(env, "sample", generator=self.gen)
         rep = env.repeat(order.shape[0] // env.shape[0])
         with torch.no_grad():
-            cost = tour_cost(rep, order, choose_heads(rep, order, self.cfg.head_rule))
+            cost = tour_cost(rep, order, choose_heads(rep, order, self.cfg.heads))
         c = (cost / COST_SCALE).float()
-        critic_loss = torch.tensor(math.nan)
-        if self.cfg.model == "drl":
-            value = self.model.critic(env)
-            loss = ((c - value.detach()) * logp).mean()
-            if self.cfg.direction:
-                loss = loss + self._direction_loss(env, order, c, first)
-            critic_loss = torch.nn.functional.mse_loss(value, c)
-            total = loss + critic_loss
-        else:
-            c = c.view(env.shape[0], -1)
-            loss = ((c - c.mean(1, keepdim=True)).flatten() * logp).mean()
-            total = loss
+        advantage, baseline_loss = self.baseline(env, c)
+        loss = (advantage * logp).mean()
+        if self.cfg.direction:
+            loss = loss + self._direction_loss(env, order, c, first)
+        total = loss if baseline_loss is None else loss + baseline_loss
         for opt in self.optims:
             opt.zero_grad(set_to_none=True)
         total.backward()
         nn.utils.clip_grad_norm_(self.model.parameters(), self.cfg.grad_clip)
         for opt in self.optims:
             opt.step()
-        return float(loss.detach()), -float(cost.mean()), float(critic_loss.detach())
+        critic_loss = math.nan if baseline_loss is None else float(baseline_loss.detach())
+        return float(loss.detach()), -float(cost.mean()), critic_loss
 
     def _direction_loss(self, env: EnvBatch, order: torch.Tensor, c: torch.Tensor,
                         first: torch.Tensor) -> torch.Tensor:
@@ -326,7 +248,7 @@ class Trainer:
         rev = order.flip(-1)
         lp, lp_rev = first.gather(1, torch.stack([order[:, 0], rev[:, 0]], 1)).unbind(1)
         with torch.no_grad():
-            c_rev = (tour_cost(env, rev, choose_heads(env, rev, self.cfg.head_rule))
+            c_rev = (tour_cost(env, rev, choose_heads(env, rev, self.cfg.heads))
                      / COST_SCALE).float()
         diff = c_rev - c  # > 0: the sampled direction is the cheaper one
         return (diff.abs() * nn.functional.softplus(-diff.sign() * (lp - lp_rev))).mean()
@@ -334,7 +256,7 @@ class Trainer:
     def validate(self) -> tuple[float, float | None]:
         """Mean greedy energy (J) on the validation set, and the mean gap (%) when known."""
         self.model.eval()
-        cost = greedy_cost(self.model, self.val, self.cfg.head_rule)
+        cost = greedy_cost(self.model, self.val, self.cfg.heads)
         gap = None
         if self.val_opt is not None:
             gap = float(((cost / self.val_opt - 1) * 100).mean())

@@ -1,4 +1,4 @@
-"""Shared RL pieces: the torch reward equals the evaluator, heads, exact enumeration, checkpoints."""
+"""The batch environment: the torch reward equals the evaluator, the head rules, padding."""
 
 from __future__ import annotations
 
@@ -8,19 +8,15 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from gtsp_bench.solvers.heads import optimal_heads  # noqa: E402
-from gtsp_bench.solvers.learned.drl import PointerPolicy  # noqa: E402
-from gtsp_bench.solvers.learned.rl_common import (  # noqa: E402
+from gtsp_bench.solvers.learned.env import (  # noqa: E402
     env_from_instances,
-    exact_by_enumeration,
-    load_policy,
     make_env,
     mirror,
     optimal_heads_batch,
     paper_heads,
-    paper_rule_optimum,
-    save_policy,
     tour_cost,
 )
+from gtsp_bench.solvers.learned.oracles import exact_by_enumeration  # noqa: E402
 
 from gtsp_bench.energy import evaluate, evaluate_batch  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
@@ -89,32 +85,6 @@ def test_heads_match_the_numpy_rules():
         assert paper[i].tolist() == expect
 
 
-def test_exact_enumeration_matches_brute_force():
-    """The enumerated optimum equals the brute-force solver on tiny instances."""
-    instances = [generate_instance(3, 3, seed=i) for i in range(4)]
-    env = env_from_instances(instances, [0.2, 0.5, 0.7, 1.0])
-    opt = exact_by_enumeration(env, chunk=7)
-    for i, inst in enumerate(instances):
-        brute = run_solver("brute", inst, [0.2, 0.5, 0.7, 1.0][i]).objective
-        assert opt[i].item() == pytest.approx(brute, rel=1e-12)
-
-
-def test_paper_rule_optimum_equals_best_enumerated_order():
-    """The recursion over (visited, last cluster, head) equals trying every order with the
-    paper's heads, and is never below the exact optimum."""
-    import itertools
-
-    rng = np.random.default_rng(11)
-    b, k, n = 6, 5, 7
-    env = make_env(generate_batch(rng, b, k, n), rng.uniform(0, 1, b))
-    perms = torch.tensor(list(itertools.permutations(range(k))))
-    rep, orders = env.repeat(len(perms)), perms.repeat(b, 1)
-    enumerated = tour_cost(rep, orders, paper_heads(rep, orders)).view(b, -1).min(1).values
-    got = paper_rule_optimum(env)
-    assert torch.allclose(got, enumerated, rtol=1e-12, atol=0)
-    assert torch.all(got >= exact_by_enumeration(env) * (1 - 1e-12))
-
-
 def test_unequal_clusters_are_padded_without_changing_the_optimum():
     """Padding a small cluster with copies of its node 0 keeps the brute-force optimum."""
     clusters = (np.array([[100.0, 100.0], [120.0, 90.0], [90.0, 130.0]]),
@@ -130,32 +100,3 @@ def test_non_uav_instance_is_refused():
     inst = Instance("plain", (np.array([[0.0, 1.0]]),), depot=None, params=None)
     with pytest.raises(InputError, match="need a UAV instance with a depot"):
         env_from_instances([inst], [0.5])
-
-
-def test_checkpoint_round_trip_and_bad_files(tmp_path):
-    """A saved policy reloads with identical outputs; corrupt or mismatched files: one-line errors."""
-    torch.manual_seed(0)
-    model = PointerPolicy(n_nodes=5, dim=16)
-    path = tmp_path / "p.pt"
-    save_policy(model, path)
-    loaded = load_policy(path, "drl")
-    env = make_env(generate_batch(np.random.default_rng(0), 4, 4, 5), 0.3)
-    with torch.no_grad():
-        assert torch.equal(model.decode(env)[1], loaded.decode(env)[1])
-    corrupt = tmp_path / "corrupt.pt"
-    corrupt.write_bytes(path.read_bytes()[:200])
-    truncated = tmp_path / "text.pt"
-    truncated.write_text("not a checkpoint")
-    other = PointerPolicy(n_nodes=5, dim=16)
-    other.config = {"model": "drl", "n_nodes": 5, "dim": 32}  # shape mismatch
-    mismatched = tmp_path / "mismatched.pt"
-    save_policy(other, mismatched)
-    cases = [(corrupt, "not a readable checkpoint"), (truncated, "not a readable checkpoint"),
-             (mismatched, "weights do not fit the model config"),
-             (tmp_path / "missing.pt", "no such checkpoint file")]
-    for bad, message in cases:
-        with pytest.raises(InputError, match=message) as err:
-            load_policy(bad, "drl")
-        assert "\n" not in str(err.value) and str(bad) in str(err.value)
-    with pytest.raises(InputError, match="holds a 'drl' model, not 'am'"):
-        load_policy(path, "am")
