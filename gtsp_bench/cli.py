@@ -34,6 +34,17 @@ examples:
   gtsp-bench bench --suite exact --quick
 """
 
+_BENCH_DESCRIPTION = """\
+Run the paper's experiments (ratio-omega, ratio-k, runtime, trajectories, training) over seeded
+instance sets in parallel; write OUT/<experiment>.csv and .png and refresh OUT/README.md. Finished
+solves are logged in OUT/tmp/runs.jsonl, so an interrupted run resumes.
+
+With --suite, run a side-by-side suite instead: exact (time to proven optimum, GTSPLIB against
+best known), heuristics (mean gap and median time) or learned (the learned policies against the
+optimum). Its table goes to stdout, one CSV row per solve to OUT/<suite>.csv (default OUT:
+benchmarks/out).
+"""
+
 _BENCH_EPILOG = """\
 suites (--suite NAME) and the options each takes besides -K, --solvers, --instances, --out, --quick:
   exact       --seed --time-limit --omegas --solver-seed --dp-max-k --no-generated
@@ -196,14 +207,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=_cmd_train)
 
     p = sub.add_parser("bench", help="regenerate the paper's tables and figures, or run a suite",
-                       description="Run the paper's experiments (ratio-omega, ratio-k, runtime, "
-                       "trajectories, training) over seeded instance sets in parallel; write "
-                       "OUT/<experiment>.csv and .png and refresh OUT/README.md. Finished solves "
-                       "are logged in OUT/tmp/runs.jsonl, so an interrupted run resumes. With "
-                       "--suite, run one of the side-by-side suites instead (exact: time to proven "
-                       "optimum; heuristics: gap and time; learned: the learned policies against "
-                       "the optimum): its table on stdout, one CSV row per solve in "
-                       "OUT/<suite>.csv (default OUT: benchmarks/out).",
+                       description=_BENCH_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        epilog=_BENCH_EPILOG)
     p.add_argument("--suite", choices=("exact", "heuristics", "learned"), default=None,
