@@ -7,6 +7,7 @@ STAMP  := $(VENV)/.installed
 K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
+SUITE_ARGS ?=
 
 .PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl clean
 
@@ -36,17 +37,16 @@ bench: $(STAMP)
 bench-quick: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --quick $(BENCH_ARGS)
 
-# Heuristics side by side (benchmarks/heuristics.py); QUICK=1 for a subset.
-bench-heuristics: $(STAMP)
-	$(BIN)/python benchmarks/heuristics.py $(if $(QUICK),--quick)
-
-# Learned policies against the exact optimum (issue 5's figures).
-bench-drl: $(STAMP)
-	PYTHONPATH=. $(BIN)/python benchmarks/drl.py
-
-# Exact solvers side by side (benchmarks/exact.py); QUICK=1 for a subset.
+# The side-by-side suites (gtsp-bench bench --suite NAME; rows in benchmarks/out/NAME.csv):
+# QUICK=1 for the quick preset, SUITE_ARGS for more options (gtsp-bench bench --help).
 bench-exact: $(STAMP)
-	$(BIN)/python benchmarks/exact.py $(if $(QUICK),--quick)
+	$(BIN)/python -m gtsp_bench.cli bench --suite exact $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+bench-heuristics: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench --suite heuristics $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+bench-drl: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info

@@ -100,3 +100,52 @@ def check_mapping(name: str, value: object) -> dict:
     if not isinstance(value, Mapping):
         raise InputError(f"{name} must be a mapping of names to values, got {value!r}")
     return dict(value)
+
+
+_K_FORMS = "a range 4..10, a list 4,7,10 or a mix 4..7,10"
+
+
+def parse_ks(text: object) -> tuple[int, ...]:
+    """Parse a set of cluster counts: a range ``4..10``, a list ``4,7,10`` or a mix ``4..7,10``.
+
+    Spaces are ignored; the result is sorted and without repeats.
+
+    Raises
+    ------
+    InputError
+        One line naming the bad part: not a number or range, a reversed range, or K < 1.
+    """
+    out: set[int] = set()
+    for part in str(text).replace(" ", "").split(","):
+        lo, sep, hi = part.partition("..")
+        try:
+            a = int(lo)
+            b = int(hi) if sep else a
+        except ValueError:
+            what = "empty entry" if not part else f"{part!r} is not a number or a range"
+            raise InputError(f"bad K {text!r}: {what} (expected {_K_FORMS})") from None
+        if a < 1:
+            raise InputError(f"bad K {text!r}: cluster counts must be >= 1, got {a}")
+        if b < a:
+            raise InputError(f"bad K {text!r}: range {part} is reversed (write {b}..{a})")
+        out.update(range(a, b + 1))
+    return tuple(sorted(out))
+
+
+def parse_omegas(text: object) -> tuple[float, ...]:
+    """Parse a comma-separated list of omegas, e.g. ``0,0.5,0.9``, each checked by
+    :func:`check_omega`; the order is kept.
+
+    Raises
+    ------
+    InputError
+        An entry that is not a number in [0, 1], or an empty list.
+    """
+    out = []
+    for part in str(text).replace(" ", "").split(","):
+        try:
+            out.append(check_omega(float(part)))
+        except (ValueError, InputError):
+            raise InputError(f"bad omegas {text!r}: {part!r} is not a number in [0, 1] "
+                             "(expected a list like 0,0.5,0.9)") from None
+    return tuple(out)

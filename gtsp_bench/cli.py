@@ -34,6 +34,34 @@ examples:
   gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver greedy
   gtsp-bench solvers
   gtsp-bench bench -K 4..10
+  gtsp-bench bench --suite exact --quick
+"""
+
+_BENCH_DESCRIPTION = """\
+Run the paper's experiments (ratio-omega, ratio-k, runtime, trajectories, training) over seeded
+instance sets in parallel; write OUT/<experiment>.csv and .png and refresh OUT/README.md. Finished
+solves are logged in OUT/tmp/runs.jsonl, so an interrupted run resumes.
+
+With --suite, run a side-by-side suite instead: exact (time to proven optimum, GTSPLIB against
+best known), heuristics (mean gap and median time) or learned (the learned policies against the
+optimum). Its table goes to stdout, one CSV row per solve to OUT/<suite>.csv (default OUT:
+benchmarks/out).
+"""
+
+_BENCH_EPILOG = """\
+suites (--suite NAME) and the options each takes besides -K, --solvers, --instances, --out, --quick:
+  exact       --seed --time-limit --omegas --solver-seed --dp-max-k --no-generated
+              --gtsplib --names --max-nodes --no-gtsplib
+  heuristics  --seed --time-limit --omegas (one) --solver-seed --exact --exact-time-limit
+              --gtsplib --names --max-nodes --no-gtsplib
+  learned     --repeats --cache
+
+examples:
+  gtsp-bench bench -K 4..10                       # the paper's experiments into results/
+  gtsp-bench bench --suite exact --quick          # K = 4,7,10, omega 0.5, two GTSPLIB samples
+  gtsp-bench bench --suite exact -K 4..7,10 --omegas 0.5 --time-limit 30 --no-gtsplib
+  gtsp-bench bench --suite heuristics --quick     # 3 instances per K, 5 s per solve
+  gtsp-bench bench --suite learned -K 4 --instances 20 --solvers drl,am
 """
 
 
@@ -187,40 +215,71 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="CKPT.pt", help="policy file to write")
     p.set_defaults(handler=_cmd_train)
 
-    p = sub.add_parser("bench", help="regenerate the paper's tables and figures (CSV, PNG)",
-                       description="Run the paper's experiments (ratio-omega, ratio-k, runtime, "
-                       "trajectories, training) over seeded instance sets in parallel; write "
-                       "OUT/<experiment>.csv and .png and refresh OUT/README.md. Finished solves "
-                       "are logged in OUT/tmp/runs.jsonl, so an interrupted run resumes.")
-    p.add_argument("--experiments", "-e", default="all", metavar="LIST",
-                   help="comma-separated experiments, or 'all' (default)")
+    p = sub.add_parser("bench", help="regenerate the paper's tables and figures, or run a suite",
+                       description=_BENCH_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       epilog=_BENCH_EPILOG)
+    p.add_argument("--suite", choices=("exact", "heuristics", "learned"), default=None,
+                   help="run a benchmark suite instead of the paper's experiments")
     p.add_argument("--clusters", "-K", metavar="K",
-                   help="cluster counts: a range 4..10 or a list 4,7 (default: 4..10; quick: 4,5)")
+                   help="cluster counts: a range 4..10, a list 4,7,10 or a mix 4..7,10 (default: "
+                   "4..10; quick: 4,5; suites: their own)")
     p.add_argument("--solvers", "-s", metavar="LIST",
-                   help="comma-separated solvers (default: every registered benchmark solver)")
-    p.add_argument("--reference", metavar="NAME", default="auto",
-                   help="exact solver giving the optimum (default: dp up to K=12, else milp)")
+                   help="comma-separated solvers (default: every registered benchmark solver; "
+                   "suites: their own; learned: label prefixes, e.g. drl,am)")
     p.add_argument("--instances", type=_int, metavar="N",
-                   help="instances per K (default: 30; quick: 3)")
-    p.add_argument("--nodes", "-n", type=_int, default=20, metavar="N",
-                   help="nodes per cluster (default: 20)")
-    p.add_argument("--seed", type=_int, default=1, help="instance-set seed (default: 1)")
-    p.add_argument("--time-limit", "-t", type=_float, default=10.0, metavar="S",
-                   help="per-solve time limit in seconds (default: 10)")
-    p.add_argument("--jobs", "-j", type=_int, metavar="J",
-                   help="worker processes (default: the number of cores)")
+                   help="instances per K (default: 30; quick: 3; suites: their own)")
+    p.add_argument("--seed", type=_int, default=None,
+                   help="instance-set seed (default: 1; suites exact, heuristics: 0)")
+    p.add_argument("--time-limit", "-t", type=_float, default=None, metavar="S",
+                   help="per-solve time limit in seconds (default: 10; suites: their own)")
     p.add_argument("--quick", action="store_true",
-                   help="few instances and small K, written to results/quick (a smoke run)")
-    p.add_argument("--out", "-o", metavar="DIR", help="output folder (default: results)")
-    p.add_argument("--instance-dir", default="instances", metavar="DIR",
+                   help="a smoke run: few instances and small K, written to results/quick "
+                   "(suites: their quick preset)")
+    p.add_argument("--out", "-o", metavar="DIR",
+                   help="output folder (default: results; suites: benchmarks/out)")
+    g = p.add_argument_group("the paper's experiments only")
+    g.add_argument("--experiments", "-e", default=None, metavar="LIST",
+                   help="comma-separated experiments, or 'all' (default)")
+    g.add_argument("--reference", metavar="NAME", default=None,
+                   help="exact solver giving the optimum (default: dp up to K=12, else milp)")
+    g.add_argument("--nodes", "-n", type=_int, default=None, metavar="N",
+                   help="nodes per cluster (default: 20)")
+    g.add_argument("--jobs", "-j", type=_int, metavar="J",
+                   help="worker processes (default: the number of cores)")
+    g.add_argument("--instance-dir", default=None, metavar="DIR",
                    help="where instance sets are kept (default: instances)")
-    p.add_argument("--checkpoints", default=None, metavar="DIR",
+    g.add_argument("--checkpoints", default=None, metavar="DIR",
                    help="where <model>.train.csv training logs are (default: the shipped "
                         "checkpoints, gtsp_bench/solvers/learned/checkpoints)")
-    p.add_argument("--fresh", action="store_true", help="redo solves already in the task log")
-    p.add_argument("--report-only", action="store_true",
+    g.add_argument("--fresh", action="store_true", help="redo solves already in the task log")
+    g.add_argument("--report-only", action="store_true",
                    help="only refresh OUT/README.md from the CSV files")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g = p.add_argument_group("suites only (--suite); each takes some, see below")
+    g.add_argument("--omegas", metavar="LIST",
+                   help="omegas, e.g. 0,0.5,0.9 (exact: default 0,0.5,0.9, quick 0.5; heuristics: "
+                   "one, default 0.5)")
+    g.add_argument("--solver-seed", type=_seed, metavar="SEED",
+                   help="seed given to every solve (default: 0)")
+    g.add_argument("--dp-max-k", type=_int, metavar="K", help="exact: largest K given to dp (default: 12)")
+    g.add_argument("--exact", metavar="LIST",
+                   help="heuristics: exact reference solvers, NAME[:MAX_K] in order (default: dp:10,milp)")
+    g.add_argument("--exact-time-limit", type=_float, metavar="S",
+                   help="heuristics: seconds per exact reference solve (default: 120)")
+    g.add_argument("--gtsplib", metavar="DIR",
+                   help="folder with best_known.csv and the .gtsp(.gz) files (default: "
+                   "$GTSP_BENCH_GTSPLIB, else the repository's instances/gtsplib)")
+    g.add_argument("--names", metavar="LIST",
+                   help="GTSPLIB instances, comma-separated (default: the five samples; quick: a few)")
+    g.add_argument("--max-nodes", type=_int, metavar="N",
+                   help="largest GTSPLIB sample in nodes (exact default: 318; heuristics: no limit)")
+    g.add_argument("--no-gtsplib", action="store_true", help="skip the GTSPLIB samples")
+    g.add_argument("--no-generated", action="store_true", help="exact: skip the generated instances")
+    g.add_argument("--repeats", type=_int, metavar="R",
+                   help="learned: timed runs per cell, the median is reported (default: 3; quick: 1)")
+    g.add_argument("--cache", metavar="FILE",
+                   help="learned: cache of exact optima (default: benchmarks/drl_exact.csv)")
     p.set_defaults(handler=_cmd_bench)
 
     p = sub.add_parser("solvers", help="list the registered solvers",
@@ -337,19 +396,43 @@ def _cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``bench`` options of the paper's experiments only, and of the suites only (argparse dests).
+_PAPER_ONLY = ("experiments", "reference", "nodes", "jobs", "instance_dir", "checkpoints", "fresh",
+               "report_only", "no_progress")
+_SUITE_ONLY = ("omegas", "solver_seed", "dp_max_k", "exact", "exact_time_limit", "gtsplib", "names",
+               "max_nodes", "no_gtsplib", "no_generated", "repeats", "cache")
+
+
+def _flag(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _given(args: argparse.Namespace, dests: Sequence[str]) -> list[str]:
+    return [_flag(d) for d in dests if getattr(args, d) is not None and getattr(args, d) is not False]
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
+    if args.suite:
+        return _cmd_suite(args)
+    stray = _given(args, _SUITE_ONLY)
+    if stray:
+        raise InputError(f"{stray[0]} is an option of the benchmark suites: add --suite "
+                         "exact, heuristics or learned")
     import matplotlib
 
     matplotlib.use("Agg")
     from gtsp_bench.report import write_report
-    from gtsp_bench.runner import make_config, run_bench
+    from gtsp_bench.runner import DEFAULT_SEED, DEFAULT_TIME_LIMIT, make_config, run_bench
 
     config = make_config(
-        experiments=args.experiments, ks=args.clusters, solvers=args.solvers,
-        reference=args.reference, n_instances=args.instances, n_nodes=args.nodes, seed=args.seed,
-        time_limit=args.time_limit, jobs=args.jobs, quick=args.quick, out_dir=args.out,
-        instance_dir=args.instance_dir, checkpoint_dir=args.checkpoints, fresh=args.fresh,
-        progress=not args.no_progress,
+        experiments=args.experiments or "all", ks=args.clusters, solvers=args.solvers,
+        reference=args.reference or "auto", n_instances=args.instances,
+        n_nodes=20 if args.nodes is None else args.nodes,
+        seed=DEFAULT_SEED if args.seed is None else args.seed,
+        time_limit=DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit,
+        jobs=args.jobs, quick=args.quick, out_dir=args.out,
+        instance_dir=args.instance_dir or "instances", checkpoint_dir=args.checkpoints,
+        fresh=args.fresh, progress=not args.no_progress,
     )
     if args.report_only:
         if not any(config.out_dir.glob("*.csv")):
@@ -358,6 +441,19 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         return 0
     run_bench(config)
     return 0
+
+
+def _cmd_suite(args: argparse.Namespace) -> int:
+    from gtsp_bench.suites import make_suite_config, run_suite
+
+    stray = _given(args, _PAPER_ONLY)
+    if stray:
+        raise InputError(f"{stray[0]} is an option of the paper's experiments, not of --suite")
+    options = {d: getattr(args, d) for d in _SUITE_ONLY}
+    config = make_suite_config(args.suite, quick=args.quick, out_dir=args.out, ks=args.clusters,
+                               solvers=args.solvers, instances=args.instances, seed=args.seed,
+                               time_limit=args.time_limit, **options)
+    return run_suite(config)
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:

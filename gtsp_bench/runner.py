@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from gtsp_bench.checks import parse_ks
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
 from gtsp_bench.instance import Instance
@@ -93,30 +94,6 @@ CSV_COLUMNS = (
 
 
 # ---------------------------------------------------------------------- configuration
-def parse_ks(text: str) -> tuple[int, ...]:
-    """Parse cluster counts: a range ``4..10``, a list ``4,7``, or a mix ``4,6..8``.
-
-    Raises
-    ------
-    InputError
-        For anything else, a reversed range, or K < 1.
-    """
-    out: set[int] = set()
-    for part in str(text).replace(" ", "").split(","):
-        lo, sep, hi = part.partition("..")
-        try:
-            a = int(lo)
-            b = int(hi) if sep else a
-        except ValueError:
-            raise InputError(
-                f"bad K {text!r}: expected a range like 4..10 or a list like 4,7"
-            ) from None
-        if a < 1 or b < a:
-            raise InputError(f"bad K {text!r}: cluster counts must be >= 1 and ranges increasing")
-        out.update(range(a, b + 1))
-    return tuple(sorted(out))
-
-
 def _split_names(text: str | Sequence[str], what: str, valid: Sequence[str]) -> tuple[str, ...]:
     names = text.split(",") if isinstance(text, str) else list(text)
     names = [n.strip() for n in names if n.strip()]

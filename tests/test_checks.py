@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from gtsp_bench.checks import check_float, check_int, check_mapping, default_time_limit
+from gtsp_bench.checks import (
+    check_float,
+    check_int,
+    check_mapping,
+    default_time_limit,
+    parse_ks,
+    parse_omegas,
+)
 from gtsp_bench.errors import InputError
 
 
@@ -46,3 +53,39 @@ def test_check_mapping():
     for bad in (None, "dim", [("dim", 16)]):
         with pytest.raises(InputError, match="opts must be a mapping"):
             check_mapping("opts", bad)
+
+
+def test_parse_ks_ranges_lists_and_mixes():
+    """The one K-set syntax: a range, a list, a mix; spaces ignored, sorted, no repeats."""
+    assert parse_ks("4..10") == tuple(range(4, 11))
+    assert parse_ks("4,7,10") == (4, 7, 10)
+    assert parse_ks("4..7,10") == (4, 5, 6, 7, 10)
+    assert parse_ks(" 10, 4..5 ,5") == (4, 5, 10)
+    assert parse_ks("7") == (7,) and parse_ks("3..3") == (3,)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("10..4", "range 10..4 is reversed (write 4..10)"),
+    ("4..x", "'4..x' is not a number or a range"),
+    ("four", "'four' is not a number or a range"),
+    ("4;7", "'4;7' is not a number or a range"),
+    ("4..", "'4..' is not a number or a range"),
+    ("4,,7", "empty entry"),
+    ("", "empty entry"),
+    ("0", "cluster counts must be >= 1, got 0"),
+    ("-2..3", "cluster counts must be >= 1, got -2"),
+])
+def test_parse_ks_bad_input(text, message):
+    """Bad text: one line naming the K set and the bad part, with the accepted forms."""
+    with pytest.raises(InputError) as info:
+        parse_ks(text)
+    assert str(info.value).startswith(f"bad K {text!r}: ") and message in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_parse_omegas():
+    """Comma-separated omegas in [0, 1], order kept; anything else is refused."""
+    assert parse_omegas("0,0.5,0.9") == (0.0, 0.5, 0.9) and parse_omegas("0.6, 0.3") == (0.6, 0.3)
+    for bad in ("0.5,x", "1.5", "", "nan", "0.5,"):
+        with pytest.raises(InputError, match="bad omegas"):
+            parse_omegas(bad)

@@ -2,7 +2,7 @@
 
 :func:`exact_by_enumeration` is the optimum (every order, optimal heads): the trainer's
 validation gap for K <= 6. :func:`paper_rule_optimum` is the best any visiting order reaches
-when heads follow the paper's rule: the bound ``benchmarks/drl.py`` reports for policies that
+when heads follow the paper's rule: the bound the learned suite (``gtsp-bench bench --suite learned``) reports for policies that
 keep that rule.
 """
 
