@@ -271,7 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder with best_known.csv and the .gtsp(.gz) files (default: "
                    "$GTSP_BENCH_GTSPLIB, else the repository's instances/gtsplib)")
     g.add_argument("--names", metavar="LIST",
-                   help="GTSPLIB instances, comma-separated (default: the five samples; quick: a few)")
+                   help="GTSPLIB instances, comma-separated (default: the five samples, or all of "
+                        "--gtsplib DIR; quick: a few)")
     g.add_argument("--max-nodes", type=_int, metavar="N",
                    help="largest GTSPLIB sample in nodes (exact default: 318; heuristics: no limit)")
     g.add_argument("--no-gtsplib", action="store_true", help="skip the GTSPLIB samples")

@@ -83,8 +83,9 @@ _GTSPLIB = ("gtsplib", "names", "max_nodes", "no_gtsplib")
 
 @dataclass(frozen=True)
 class Preset:
-    """A suite's defaults (full run or ``--quick``); ``names``: GTSPLIB instances (None: all
-    the symmetric ones of the folder)."""
+    """A suite's defaults (full run or ``--quick``); ``names``: GTSPLIB instances (None: the
+    five samples of the bundled library, or every symmetric instance of a folder given with
+    ``--gtsplib``)."""
 
     ks: tuple[int, ...]
     instances: int
@@ -113,7 +114,7 @@ SUITES: dict[str, Suite] = {
     "exact": Suite(
         "exact", "exact solvers: time to proven optimum; GTSPLIB against best known",
         ("milp", "dp"), 0,
-        Preset((*range(4, 11), 15, 20, 30), 5, (0.0, 0.5, 0.9), 60.0, SAMPLES),
+        Preset((*range(4, 11), 15, 20, 30), 5, (0.0, 0.5, 0.9), 60.0),
         Preset((4, 7, 10), 5, (0.5,), 60.0, ("11berlin52", "20kroA100")),
         (*_COMMON, "seed", "time_limit", "omegas", "solver_seed", "dp_max_k", "no_generated", *_GTSPLIB),
         max_nodes=318,
@@ -121,7 +122,7 @@ SUITES: dict[str, Suite] = {
     "heuristics": Suite(
         "heuristics", "heuristics: mean gap to the optimum / best known and median time",
         ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp"), 0,
-        Preset((4, 7, 10, 20), 10, (0.5,), 10.0, SAMPLES),
+        Preset((4, 7, 10, 20), 10, (0.5,), 10.0),
         Preset((4, 7, 10, 20), 3, (0.5,), 5.0, ("11berlin52", "20kroA100", "40d198")),
         (*_COMMON, "seed", "time_limit", "omegas", "solver_seed", "exact", "exact_time_limit", *_GTSPLIB),
     ),
@@ -242,6 +243,8 @@ def make_suite_config(suite: str, *, quick: bool = False, out_dir: str | os.Path
         raise InputError(f"the heuristics suite takes one omega, got {len(omegas)}")
     time_limit = check_time_limit(given.get("time_limit", preset.time_limit))
     names = given.get("names", preset.names)
+    if names is None and not given.get("gtsplib"):
+        names = SAMPLES
     gtsplib = None
     if "gtsplib" in spec.options and not given.get("no_gtsplib"):
         gtsplib = Path(given["gtsplib"]) if given.get("gtsplib") else gtsplib_folder()

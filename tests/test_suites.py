@@ -13,6 +13,7 @@ from gtsp_bench import suites
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import instance_set
+from gtsp_bench.gtsplib import SAMPLES
 from gtsp_bench.registry import run_solver
 from gtsp_bench.suites import SUITES, make_suite_config, parse_exact
 from gtsp_bench.tables import Row, time_to_proof_cell
@@ -36,7 +37,7 @@ def test_presets_are_the_documented_defaults():
     exact = make_suite_config("exact")
     assert exact.ks == (4, 5, 6, 7, 8, 9, 10, 15, 20, 30) and exact.omegas == (0.0, 0.5, 0.9)
     assert (exact.instances, exact.set_seed, exact.time_limit, exact.max_nodes) == (5, 0, 60.0, 318)
-    assert exact.solvers == ("milp", "dp") and exact.names is None
+    assert exact.solvers == ("milp", "dp") and exact.names == SAMPLES  # of the bundled library
     quick = make_suite_config("exact", quick=True)
     assert quick.ks == (4, 7, 10) and quick.omegas == (0.5,)
     assert quick.names == ("11berlin52", "20kroA100") and quick.instances == 5
