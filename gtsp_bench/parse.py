@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import MAX_TOUR_COST, check_finite_array, check_instance_numbers
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.params import EnergyParams
@@ -102,7 +103,9 @@ def instance_from_dict(data: Any, default_name: str = "instance") -> Instance:
     meta = data.get("meta") or {}
     if not isinstance(meta, dict):
         raise InputError("'meta' must be an object")
-    return Instance(name=name, clusters=tuple(clusters), depot=depot, params=params, meta=meta)
+    instance = Instance(name=name, clusters=tuple(clusters), depot=depot, params=params, meta=meta)
+    check_instance_numbers(instance)
+    return instance
 
 
 def parse_json_instance(text: str, default_name: str = "instance") -> Instance:
@@ -221,7 +224,7 @@ def parse_gtsp(text: str) -> Instance:
     meta = {"format": "gtsplib", "node_ids": (order + 1).tolist()}
     if header.get("COMMENT"):
         meta["comment"] = header["COMMENT"]
-    return Instance(
+    instance = Instance(
         name=name,
         clusters=clusters,
         depot=None,
@@ -230,6 +233,8 @@ def parse_gtsp(text: str) -> Instance:
         weights=None if weights is None else weights[np.ix_(order, order)],
         meta=meta,
     )
+    check_instance_numbers(instance)
+    return instance
 
 
 def _header_int(header: Mapping[str, str], key: str) -> int:
@@ -332,6 +337,7 @@ def _parse_full_matrix(header: Mapping[str, str], lines: list[str] | None, dim: 
     if values.size != dim * dim:
         raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, FULL_MATRIX needs {dim * dim}")
     w = values.reshape(dim, dim)
+    check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
     if not np.allclose(w, w.T):
         raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
     return w
