@@ -389,7 +389,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         reference=args.reference, n_instances=args.instances, n_nodes=args.nodes, seed=args.seed,
         time_limit=args.time_limit, jobs=args.jobs, quick=args.quick, out_dir=args.out,
         instance_dir=args.instance_dir, checkpoint_dir=args.checkpoints, fresh=args.fresh,
-        progress=not args.no_progress,
+        retry_failed=args.retry_failed, progress=not args.no_progress,
     )
     if args.report_only:
         if not any(config.out_dir.glob("*.csv")):
