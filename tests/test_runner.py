@@ -15,6 +15,8 @@ import matplotlib
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtsp_bench import runner
 from gtsp_bench.cli import main
@@ -479,3 +481,58 @@ def test_solver_failures_stay_until_retry_failed_and_refusals_are_not_failures(t
     assert "0 solves run, 2 re-used, 1 failed" in capsys.readouterr().err
     assert main([*base, "--solvers", "t-crash", "--retry-failed"]) == 1
     assert "1 solves run, 1 re-used, 1 failed" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------- fuzzing the log reader
+# GTSP_BENCH_FUZZ_EXAMPLES=2000 make test runs many more examples than the default.
+FUZZ = settings(max_examples=int(os.environ.get("GTSP_BENCH_FUZZ_EXAMPLES", "40")), deadline=None,
+                database=None, suppress_health_check=list(HealthCheck))
+_json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-(10**20), 10**20) | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=10,
+)
+_FIELDS = ["key", "solver", "omega", "seed", "status", "objective", "order", "heads", "runtime_s",
+           "lower_bound", "note", "cause", "ground_J"]
+
+
+@st.composite
+def _log_line(draw) -> bytes:
+    """A log line: a real record with fields replaced or dropped, a random JSON value, or bytes."""
+    kind = draw(st.sampled_from(["mutated", "json", "bytes"]))
+    if kind == "bytes":
+        return draw(st.binary(max_size=40)).replace(b"\n", b"")
+    if kind == "json":
+        return json.dumps(draw(_json_values)).encode()
+    rec = _record("a")
+    for _ in range(draw(st.integers(1, 3))):
+        name = draw(st.sampled_from(_FIELDS))
+        if draw(st.booleans()):
+            rec.pop(name, None)
+        else:
+            rec[name] = draw(_json_values | st.sampled_from(["failed", "refused", "time_limit", "optimal"]))
+    return json.dumps(rec).encode()
+
+
+@FUZZ
+@given(lines=st.lists(_log_line(), max_size=6), torn=st.binary(max_size=10))
+def test_fuzz_the_log_reader_keeps_only_records_a_table_can_use(tmp_path_factory, lines, torn):
+    """Any lines at all (and a torn tail): the reader never raises; each line is kept or named
+    in a warning; every record it keeps makes a table row, as a solve or as the reference."""
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.parse import format_json_instance
+
+    path = tmp_path_factory.mktemp("log") / "runs.jsonl"
+    path.write_bytes(b"".join(line + b"\n" for line in lines) + torn.replace(b"\n", b""))
+    log = TaskLog(path)
+    key = _record("a")["key"]
+    records = log.load({key: (1, 3)})
+    assert len(records) + len(log.skipped) <= len(lines)
+    assert all(line.startswith(f"{path}:") for line in log.skipped)
+    inst = generate_instance(2, 3, seed=0)
+    stored = runner.StoredInstance(inst, format_json_instance(inst), "0123", path)
+    cell = runner.Cell(2, 0, 0.5)
+    for rec in records.values():
+        row = runner._row("ratio-k", cell, stored, "greedy", "dp", rec, rec, 10.0)
+        assert row["status"] in ("optimal", "feasible", "time_limit", "failed", "refused")
+        assert isinstance(row["objective"], float)
