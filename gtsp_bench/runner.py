@@ -24,8 +24,15 @@ JSON line each to ``<out>/tmp/runs.jsonl`` (flushed and fsynced; a torn last lin
 interrupted run resumes without redoing anything and experiments share their solves (``runtime``
 re-uses ``ratio-k``). Tasks run solver by solver, each solver in fresh worker processes
 (``forkserver``): highspy and ortools never meet in one process, and a worker that hangs past the
-hard limit is killed without stopping the run. A solver that raises or times out gives a row with
-status ``failed`` / ``time_limit``. Runtimes are the solver's own ``runtime_s`` from
+hard limit is killed without stopping the run. A solver that raises gives a row with status
+``failed`` (cause ``solver``), one that refuses its input by design (an ``InputError``: dp above its
+memory limit, drl on N != 20) ``refused``, one killed at the hard limit ``time_limit`` without an
+answer. A worker that dies under a solve (the OOM killer, ``kill -9``) or a solve that runs out of
+memory is retried (:data:`gtsp_bench.pool.MAX_ATTEMPTS`), then recorded ``failed`` with cause
+``infrastructure``; the next run retries such rows, and ``retry_failed`` (``--retry-failed``) the
+solver's own failures too. Records read back from the log are checked
+(:func:`gtsp_bench.checks.check_log_record`): a bad one is skipped with a warning naming its line,
+and its solve is redone. Runtimes are the solver's own ``runtime_s`` from
 :func:`gtsp_bench.registry.run_solver`, never process start-up. Finally each experiment's tidy CSV
 and PNG are written atomically and the generated blocks of ``<out>/README.md`` are refreshed.
 """

@@ -18,6 +18,7 @@ PyVRP is an optional extra (``make install`` installs it); without it this solve
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -65,7 +66,7 @@ def folded_costs(problem: Problem, resolution: float = RESOLUTION) -> tuple[np.n
     else:
         scale = resolution / top if top > 0 else 1.0
     # A tour sums K + 1 edges: its scaled cost must stay far inside int64, or PyVRP's sums wrap.
-    if (problem.n_clusters + 1) * top * scale > MAX_TOUR_UNITS:
+    if not math.isfinite(scale) or not (problem.n_clusters + 1) * top * scale <= MAX_TOUR_UNITS:
         raise InputError(f"pyvrp: the costs of {problem.instance.name} (up to {top:.6g}) scaled to "
                          f"integers would overflow PyVRP's 64-bit sums; use another solver")
     return np.round(cost * scale).astype(np.int64), scale
