@@ -5,8 +5,9 @@ naming it; a good one is returned in its canonical type."""
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -149,3 +150,232 @@ def parse_omegas(text: object) -> tuple[float, ...]:
             raise InputError(f"bad omegas {text!r}: {part!r} is not a number in [0, 1] "
                              "(expected a list like 0,0.5,0.9)") from None
     return tuple(out)
+
+
+# ---------------------------------------------------------------------- numbers of an instance
+#: Largest coordinate magnitude accepted: its ulp (about 1.2e-7) stays far below the millimetre of
+#: a UAV file and the unit rounding of the TSPLIB rules, and squared distances cannot overflow.
+MAX_COORD = 1e9
+#: Largest cost a tour may reach (a bound from the instance's extremes): below 2^53, sums of whole
+#: numbers are exact and two tours whose costs differ are told apart.
+MAX_TOUR_COST = float(2**53)
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.6g}" if math.isfinite(value) else ("nan" if math.isnan(value) else repr(value))
+
+
+def check_finite_array(what: str, values: np.ndarray, bound: float) -> None:
+    """:class:`InputError` naming the first entry of ``values`` that is NaN, infinite or beyond
+    ``±bound``; ``what`` names the array and the entry's index is appended."""
+    arr = np.asarray(values, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(arr) <= bound)
+    if not bad.any():
+        return
+    index = tuple(int(i) for i in np.argwhere(bad)[0])
+    value = float(arr[index])
+    where = f"{what}[{']['.join(map(str, index))}]" if index else what
+    if math.isnan(value):
+        raise InputError(f"{where} is nan (not a number)")
+    kind = "infinite" if math.isinf(value) else f"beyond ±{bound:g}"
+    raise InputError(f"{where} = {_fmt(value)} is {kind}: distances and energies would not be "
+                     f"exact enough to order tours")
+
+
+def _derived_params(params: Any) -> dict[str, float]:
+    """The energy model's derived quantities, each finite or :class:`InputError` naming it."""
+    names = ("p_hover", "p_move", "flight_energy_per_m", "p_los", "path_loss_db", "p_ch_w",
+             "noise_w", "r_data", "d0", "rx_energy")
+    out = {}
+    for name in names:
+        try:
+            value = float(getattr(params, name))
+        except (OverflowError, ZeroDivisionError, ValueError):
+            value = math.inf
+        if not math.isfinite(value) or (name in ("r_data", "v_uav") and value <= 0):
+            raise InputError(f"energy parameters give {name} = {_fmt(value)}: the energy model "
+                             f"needs finite, positive derived values")
+        out[name] = value
+    return out
+
+
+def tour_cost_bound(instance: Any) -> float:
+    """An upper bound on the cost of any tour of ``instance`` (the weighted energy for any omega
+    of a UAV instance, else the length), from each cluster's extremes: O(n)."""
+    from gtsp_bench.instance import pair_distances
+
+    k = instance.n_clusters
+    with np.errstate(over="ignore", invalid="ignore"):
+        if instance.edge_weight_type == "EXPLICIT":
+            longest = float(np.max(np.abs(instance.weights)))
+        elif instance.edge_weight_type == "GEO":
+            longest = 20_038.0  # half the earth's circumference in km (TSPLIB's radius): the most
+        elif instance.edge_weight_type == "GEOM":
+            longest = 20_037_509.0  # the same in metres (GEOM's radius 6,378,388 m)
+        else:
+            pts = instance.coords if instance.depot is None else np.vstack([instance.coords, instance.depot])
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            longest = float(pair_distances(lo, hi, instance.edge_weight_type)) + 1.0
+        if instance.params is None:
+            return (k + 1) * longest
+        p = instance.params
+        d = _derived_params(p)
+        total = (k + 1) * longest * d["flight_energy_per_m"]
+        for cluster in instance.clusters:
+            n = len(cluster)
+            spread = float(np.hypot(*(cluster.max(axis=0) - cluster.min(axis=0))))
+            amp = max(p.eps_fs * spread**2, p.eps_mp * spread**4)
+            ground = (n - 1) * (p.message_bits * (p.e_elec + amp) + d["rx_energy"])
+            try:
+                ground += p.upload_energy(n) + p.hover_energy(n)
+            except (OverflowError, ZeroDivisionError):
+                return math.inf
+            total += ground
+    return float(total)
+
+
+def check_instance_numbers(instance: Any) -> None:
+    """Coordinates, matrix weights, energy parameters and the distances and energies they give
+    must be finite and small enough that double precision orders tours correctly.
+
+    Raises
+    ------
+    InputError
+        Naming the offending value: a coordinate beyond ``±MAX_COORD``, a NaN or infinite weight,
+        an energy parameter whose derived quantities overflow, or an instance whose tours could
+        cost more than ``MAX_TOUR_COST``.
+    """
+    if instance.edge_weight_type == "EXPLICIT":
+        check_finite_array("weight", instance.weights, MAX_TOUR_COST)
+    else:
+        for k, cluster in enumerate(instance.clusters):
+            check_finite_array(f"clusters[{k}]", cluster, MAX_COORD)
+        if instance.depot is not None:
+            check_finite_array("depot", instance.depot, MAX_COORD)
+    bound = tour_cost_bound(instance)
+    if not bound <= MAX_TOUR_COST:
+        what = "energy" if instance.params is not None else "length"
+        raise InputError(f"a tour's {what} could reach {_fmt(bound)}, beyond {MAX_TOUR_COST:g} where "
+                         f"double precision no longer orders tours exactly (coordinates or energy "
+                         f"parameters too large)")
+
+
+# ---------------------------------------------------------------------- memory
+def memory_limit_bytes() -> int | None:
+    """Memory this process may still allocate: the least of the address-space limit (``ulimit
+    -v``) less what is mapped now, and the system's available memory; ``None`` if unknown."""
+    limits = []
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            mapped = 0
+            try:
+                with open("/proc/self/statm") as f:
+                    mapped = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+            except (OSError, ValueError):
+                pass
+            limits.append(max(soft - mapped, 0))
+    except (ImportError, ValueError, OSError):
+        pass
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    limits.append(int(line.split()[1]) * 1024)
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    return min(limits) if limits else None
+
+
+def check_memory(what: str, need_bytes: float, hint: str) -> None:
+    """:class:`InputError` when ``need_bytes`` (an estimate made before allocating) exceeds what
+    :func:`memory_limit_bytes` says this process can use; ``hint`` names a smaller setting."""
+    limit = memory_limit_bytes()
+    if limit is not None and need_bytes > limit:
+        raise InputError(f"{what} needs about {need_bytes / 2**30:.3g} GiB of memory, more than the "
+                         f"{limit / 2**30:.3g} GiB available; {hint}")
+
+
+# ---------------------------------------------------------------------- the runner's task log
+#: Statuses of a record in the runner's task log: a solver's own (see the registry), ``failed``
+#: (``cause`` says whose fault) and ``refused`` (the solver declines the input by design).
+LOG_STATUSES = ("optimal", "feasible", "time_limit", "failed", "refused")
+#: Causes of a failed solve: the solver's own error, or the machinery around it (its worker
+#: died or was killed from outside, or memory ran out), which a later run retries.
+FAILURE_CAUSES = ("solver", "infrastructure")
+_NUMERIC_FIELDS = ("lower_bound", "runtime_s", "ground_J", "flight_J", "hover_J", "distance_m",
+                   "task_wall_s", "time_limit")
+
+
+def _int_list(name: str, value: object, length: int | None) -> list[int]:
+    if not isinstance(value, list) or not all(is_int(v) for v in value):
+        raise InputError(f"{name} is not a list of integers")
+    if length is not None and len(value) != length:
+        raise InputError(f"{name} has {len(value)} entries, not {length}")
+    return value
+
+
+def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict[str, Any]:
+    """A record read back from the runner's task log, or :class:`InputError` saying what is wrong.
+
+    Parameters
+    ----------
+    record
+        The decoded JSON line.
+    sizes
+        Cluster sizes of the instance the record's key names, when known: ``order`` must then be
+        a permutation of its clusters and ``heads`` valid indices.
+
+    The key is ``NAME#HASH|SOLVER[@REVISION]|w=OMEGA|seed=SEED|tl=LIMIT``; ``solver``, ``omega``
+    (and ``seed`` and ``time_limit`` when present) must agree with it. A solved status needs a
+    finite ``objective`` and an ``order`` and ``heads`` of one entry per cluster; ``failed`` and
+    ``refused`` need a null (or NaN, as older logs wrote) objective and no tour; ``time_limit``
+    is either (a solve stopped by its limit, or one killed at the hard limit without an answer).
+    """
+    if not isinstance(record, dict):
+        raise InputError("not a JSON object")
+    key = record.get("key")
+    if not isinstance(key, str) or not key:
+        raise InputError("'key' is not a non-empty string")
+    parts = key.split("|")
+    if len(parts) != 5 or not parts[2].startswith("w=") or not parts[3].startswith("seed="):
+        raise InputError(f"key {key!r} is not NAME#HASH|SOLVER|w=OMEGA|seed=SEED|tl=LIMIT")
+    if record.get("solver") != parts[1].split("@")[0]:
+        raise InputError(f"solver {record.get('solver')!r} does not match the key")
+    omega = record.get("omega")
+    if not is_number(omega) or f"{omega:g}" != parts[2][2:]:
+        raise InputError(f"omega {omega!r} does not match the key")
+    if "seed" in record and (not is_int(record["seed"]) or str(record["seed"]) != parts[3][5:]):
+        raise InputError(f"seed {record['seed']!r} does not match the key")
+    status = record.get("status")
+    if status not in LOG_STATUSES:
+        raise InputError(f"status {status!r} is not one of {', '.join(LOG_STATUSES)}")
+    objective = record.get("objective")
+    no_answer = objective is None or (isinstance(objective, float) and math.isnan(objective))
+    if status in ("optimal", "feasible") or (status == "time_limit" and not no_answer):
+        if not is_number(objective) or not math.isfinite(objective):
+            raise InputError(f"objective {objective!r} of a {status} solve is not a finite number")
+        k = None if sizes is None else len(sizes)
+        order = _int_list("order", record.get("order"), k)
+        heads = _int_list("heads", record.get("heads"), len(order))
+        if sorted(order) != list(range(len(order))):
+            raise InputError("order is not a permutation of the clusters")
+        if sizes is not None and any(not 0 <= h < n for h, n in zip(heads, sizes, strict=True)):
+            raise InputError("heads names a node outside its cluster")
+    elif not no_answer:
+        raise InputError(f"objective {objective!r} of a {status} solve is not null")
+    elif record.get("order") or record.get("heads"):
+        raise InputError(f"a {status} solve without an objective has a tour")
+    if "cause" in record and record["cause"] not in FAILURE_CAUSES:
+        raise InputError(f"cause {record['cause']!r} is not one of {', '.join(FAILURE_CAUSES)}")
+    for name in _NUMERIC_FIELDS:
+        value = record.get(name)
+        if value is not None and not is_number(value):
+            raise InputError(f"{name} {value!r} is not a number")
+    if "note" in record and not isinstance(record["note"], str):
+        raise InputError("note is not a string")
+    return record

@@ -1,8 +1,13 @@
 """The ``gtsp-bench`` command line.
 
 Bad input (a file, an option, a solution) prints one line ``gtsp-bench: error: <file>: <problem>``
-on stderr and exits with code 2; a misbehaving solver exits with code 1. Importing this module
-does not import torch: solvers are loaded only when used.
+on stderr and exits with code 2, and so does running out of memory (naming a smaller setting); a
+misbehaving solver exits with code 1, and so does ``bench`` when any solve failed.
+
+Standard output carries only the answer (the JSON object of ``--json``, a summary, a listing): for
+the whole command file descriptor 1 points at stderr, and the answer is written on a saved copy of
+the original stdout, so a banner a native library prints, a warning or a stray ``print`` cannot
+corrupt it. Importing this module does not import torch: solvers are loaded only when used.
 """
 
 from __future__ import annotations
@@ -12,9 +17,10 @@ import json
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from gtsp_bench import __version__
 from gtsp_bench.errors import InputError, SolverError
@@ -253,6 +259,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where <model>.train.csv training logs are (default: the shipped "
                         "checkpoints, gtsp_bench/solvers/learned/checkpoints)")
     g.add_argument("--fresh", action="store_true", help="redo solves already in the task log")
+    g.add_argument("--retry-failed", action="store_true",
+                   help="also redo solves the log records as failed by the solver's own error "
+                   "(failures whose worker died or ran out of memory are always retried)")
     g.add_argument("--report-only", action="store_true",
                    help="only refresh OUT/README.md from the CSV files")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -289,6 +298,60 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# ---------------------------------------------------------------------- standard output
+#: Where a command writes its answer (set by :func:`main` for the command's duration).
+_answer: TextIO | None = None
+
+
+def _say(text: str) -> None:
+    """Write the command's answer (one JSON object, a summary or a listing) on the real stdout."""
+    stream = _answer if _answer is not None else sys.stdout
+    stream.write(text + "\n")
+    stream.flush()
+
+
+@contextmanager
+def _stdout_reserved() -> Iterator[TextIO]:
+    """Point fd 1 and ``sys.stdout`` at stderr for the duration; yield a stream on the original
+    stdout for the answer alone.
+
+    When ``sys.stdout`` is not file descriptor 1 (replaced in-process, e.g. by pytest's capsys),
+    the answer goes to it and only fd 1 and ``sys.stdout`` are redirected.
+    """
+    original = sys.stdout
+    with suppress(Exception):
+        original.flush()
+    try:
+        os.fstat(1)
+        os.fstat(2)
+        saved: int | None = os.dup(1)
+    except OSError:  # no fd 1 or 2 (a daemon): nothing to protect
+        saved = None
+    try:
+        on_fd1 = original.fileno() == 1
+    except (AttributeError, OSError, ValueError):
+        on_fd1 = False
+    answer: TextIO = original
+    if saved is not None:
+        os.dup2(2, 1)
+        if on_fd1:
+            answer = open(os.dup(saved), "w", encoding=getattr(original, "encoding", None) or "utf-8",  # noqa: SIM115
+                          errors=getattr(original, "errors", None) or "strict")
+    sys.stdout = sys.stderr
+    try:
+        yield answer
+    finally:
+        sys.stdout = original
+        if answer is not original:
+            with suppress(BrokenPipeError):
+                answer.flush()
+            with suppress(BrokenPipeError, OSError):
+                answer.close()
+        if saved is not None:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
 # ---------------------------------------------------------------------- commands
 def _cmd_generate(args: argparse.Namespace) -> int:
     from gtsp_bench.generator import generate_instance
@@ -316,7 +379,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     text = json.dumps(result.to_dict())
     if args.output:
         atomic_write_text(args.output, text + "\n")
-    print(text if args.json else result.summary())
+    _say(text if args.json else result.summary())
     return 0
 
 
@@ -341,7 +404,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         distance=ev.distance, status="feasible", lower_bound=None,
         runtime_s=time.perf_counter() - start,
     )
-    print(json.dumps(result.to_dict()) if args.json else result.summary())
+    _say(json.dumps(result.to_dict()) if args.json else result.summary())
     return 0
 
 
@@ -399,7 +462,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 #: ``bench`` options of the paper's experiments only, and of the suites only (argparse dests).
 _PAPER_ONLY = ("experiments", "reference", "nodes", "jobs", "instance_dir", "checkpoints", "fresh",
-               "report_only", "no_progress")
+               "retry_failed", "report_only", "no_progress")
 _SUITE_ONLY = ("omegas", "solver_seed", "dp_max_k", "exact", "exact_time_limit", "gtsplib", "names",
                "max_nodes", "no_gtsplib", "no_generated", "repeats", "cache")
 
@@ -433,15 +496,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         time_limit=DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit,
         jobs=args.jobs, quick=args.quick, out_dir=args.out,
         instance_dir=args.instance_dir or "instances", checkpoint_dir=args.checkpoints,
-        fresh=args.fresh, progress=not args.no_progress,
+        fresh=args.fresh, retry_failed=args.retry_failed, progress=not args.no_progress,
     )
     if args.report_only:
         if not any(config.out_dir.glob("*.csv")):
             raise InputError(f"{config.out_dir}: no experiment CSV files to report on; run bench first")
         print(f"wrote {write_report(config.out_dir, config.checkpoint_dir)}", file=sys.stderr)
         return 0
-    run_bench(config)
-    return 0
+    summary = run_bench(config)
+    return 1 if summary.failed else 0
 
 
 def _cmd_suite(args: argparse.Namespace) -> int:
@@ -463,29 +526,56 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
     specs = solver_specs()
     width = max(len(s.name) for s in specs)
     for spec in specs:
-        print(f"{spec.name:<{width}}  {spec.description}")
+        _say(f"{spec.name:<{width}}  {spec.description}")
     return 0
 
 
 # ---------------------------------------------------------------------- entry point
+#: A smaller setting to try when a command runs out of memory.
+_MEMORY_HINTS = {
+    "generate": "use fewer --nodes or --clusters",
+    "solve": "try a smaller instance, a solver that needs less memory, or a lower "
+             "-p max_memory_gb (dp)",
+    "evaluate": "try a smaller instance",
+    "train": "use a smaller --batch or --val-size",
+    "bench": "use fewer --jobs, a smaller -K or fewer --instances",
+    "solvers": "close other programs",
+}
+
+
+def _memory_message(command: str, e: MemoryError) -> str:
+    detail = (str(e).splitlines() or [""])[0] or "an allocation failed"
+    return f"out of memory ({detail}); {_MEMORY_HINTS.get(command, 'try a smaller setting')}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit code (0 ok, 1 solver failure, 2 bad input)."""
+    """Run the CLI; returns the exit code (0 ok, 1 solver failure or a failed bench solve, 2 bad
+    input or out of memory, 130 interrupted)."""
+    global _answer
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.handler(args) or 0)
-    except InputError as e:
-        print(f"gtsp-bench: error: {e}", file=sys.stderr)
-        return 2
-    except SolverError as e:
-        print(f"gtsp-bench: solver error: {e}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("gtsp-bench: interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:  # e.g. `gtsp-bench solve ... | head`: stop quietly
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
+    with _stdout_reserved() as answer:
+        _answer = answer
+        try:
+            return int(args.handler(args) or 0)
+        except InputError as e:
+            print(f"gtsp-bench: error: {e}", file=sys.stderr)
+            return 2
+        except MemoryError as e:
+            print(f"gtsp-bench: error: {_memory_message(args.command, e)}", file=sys.stderr)
+            return 2
+        except SolverError as e:
+            print(f"gtsp-bench: solver error: {e}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print("gtsp-bench: interrupted", file=sys.stderr)
+            return 130
+        except BrokenPipeError:  # e.g. `gtsp-bench solve ... | head`: stop quietly
+            with suppress(OSError):
+                os.dup2(os.open(os.devnull, os.O_WRONLY), answer.fileno())
+            return 141
+        finally:
+            _answer = None
 
 
 if __name__ == "__main__":

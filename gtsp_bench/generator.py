@@ -26,6 +26,20 @@ DEFAULT_NODES = 20
 #: (random sequential adsorption of squares jams near 56 %): refuse at once.
 MAX_COVER = 0.5
 _MAX_DRAWS = 10_000
+#: Peak bytes a node costs while an instance is generated and written as JSON (numpy arrays,
+#: Python lists of floats, the JSON text): an estimate checked before anything is allocated.
+BYTES_PER_NODE = 320
+
+
+def check_generator_memory(n_clusters: int, n_nodes: int) -> None:
+    """Raise :class:`InputError` at once when K x N nodes would not fit in the memory this
+    process can use (:func:`gtsp_bench.checks.memory_limit_bytes`), naming a size that would."""
+    from gtsp_bench.checks import check_memory, memory_limit_bytes
+
+    limit = memory_limit_bytes()
+    fit = max(int((limit or 0) // (BYTES_PER_NODE * n_clusters)), 1)
+    check_memory(f"an instance of {n_clusters} clusters x {n_nodes} nodes", n_clusters * n_nodes
+                 * BYTES_PER_NODE, f"use at most about {fit} nodes per cluster (--nodes)")
 
 
 def check_generator_args(n_clusters: int, n_nodes: int, zeta: float, area: float) -> None:
@@ -134,12 +148,15 @@ def generate_instance(
     Raises
     ------
     InputError
-        Settings that cannot give an instance, or a negative or non-integer seed.
+        Settings that cannot give an instance, a size that would not fit in memory, or a negative
+        or non-integer seed.
     """
     try:
         rng = np.random.default_rng(seed)
     except (TypeError, ValueError):
         raise InputError(f"seed must be an integer >= 0 or a sequence of them, got {seed!r}") from None
+    check_generator_args(n_clusters, n_nodes, zeta, area)
+    check_generator_memory(n_clusters, n_nodes)
     coords = np.round(generate_batch(rng, 1, n_clusters, n_nodes, zeta, area)[0], 3)
     seed_text = "-".join(str(s) for s in np.atleast_1d(seed))
     return Instance(

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import gzip
 import os
-import tempfile
+import secrets
 import zlib
 from pathlib import Path
 
@@ -136,18 +136,25 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
-def _new_file_mode() -> int:
-    """Permissions an ordinary ``open(path, "w")`` would give a new file (0o666 less the umask)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
+def _create_temp(folder: Path, name: str) -> tuple[int, str]:
+    """A new, uniquely named file beside ``name`` opened for writing, created with mode 0o666 so
+    that the kernel applies the umask (as an ordinary ``open(path, "w")`` would); the process umask
+    is never read or changed."""
+    for _ in range(100):
+        tmp = str(folder / f".{name}.{secrets.token_hex(6)}.tmp")
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0),
+                           0o666), tmp
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary name beside {name}")
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename.
 
-    The file gets the permissions of an ordinary write (an existing file keeps its own), not the
-    owner-only mode of the temporary file.
+    The file gets the permissions of an ordinary write (a new file: 0o666 less the umask, applied
+    by the kernel; an existing file keeps its own), and the process umask is left alone.
 
     Raises
     ------
@@ -158,15 +165,16 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
     p = Path(path)
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+        fd, tmp = _create_temp(p.parent, p.name)
     except OSError as e:
         raise InputError(f"{p}: cannot write ({e.strerror})") from None
     try:
-        mode = p.stat().st_mode & 0o7777 if p.is_file() else _new_file_mode()
+        mode = p.stat().st_mode & 0o7777 if p.is_file() else None
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
-            os.fchmod(f.fileno(), mode)
+            if mode is not None:
+                os.fchmod(f.fileno(), mode)
             os.fsync(f.fileno())
         os.replace(tmp, p)
     except OSError as e:

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import MAX_TOUR_COST, check_finite_array, check_instance_numbers
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.params import EnergyParams
@@ -106,7 +107,9 @@ def instance_from_dict(data: Any, default_name: str = "instance") -> Instance:
     meta = data.get("meta") or {}
     if not isinstance(meta, dict):
         raise InputError("'meta' must be an object")
-    return Instance(name=name, clusters=tuple(clusters), depot=depot, params=params, meta=meta)
+    instance = Instance(name=name, clusters=tuple(clusters), depot=depot, params=params, meta=meta)
+    check_instance_numbers(instance)
+    return instance
 
 
 def parse_json_instance(text: str, default_name: str = "instance") -> Instance:
@@ -254,7 +257,7 @@ def parse_gtsp(text: str) -> Instance:
     meta = {"format": "gtsplib", "node_ids": (order + 1).tolist()}
     if header.get("COMMENT"):
         meta["comment"] = header["COMMENT"]
-    return Instance(
+    instance = Instance(
         name=name,
         clusters=clusters,
         depot=None,
@@ -263,6 +266,8 @@ def parse_gtsp(text: str) -> Instance:
         weights=None if weights is None else weights[np.ix_(order, order)],
         meta=meta,
     )
+    check_instance_numbers(instance)
+    return instance
 
 
 def _header_int(header: Mapping[str, str], key: str) -> int:
@@ -364,8 +369,6 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
         values = np.array(" ".join(lines).split(), dtype=np.float64)
     except ValueError:
         raise InputError("EDGE_WEIGHT_SECTION has a value that is not a number") from None
-    if not np.all(np.isfinite(values)):
-        raise InputError("EDGE_WEIGHT_SECTION has a NaN or infinite value")
     if fmt == "FULL_MATRIX":
         needed = dim * dim
     else:
@@ -374,7 +377,9 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
     if values.size != needed:
         raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, {fmt} needs {needed}")
     if fmt == "FULL_MATRIX":
-        w = values.reshape(dim, dim)
+        w = values.reshape(dim, dim).copy()
+        np.fill_diagonal(w, 0.0)
+        check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
         if not np.allclose(w, w.T):
             raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
     else:
@@ -383,7 +388,8 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
         rows, cols = np.triu_indices(dim, offset) if triangle == "upper" else np.tril_indices(dim, -offset)
         w[rows, cols] = values
         w[cols, rows] = values
-    np.fill_diagonal(w, 0.0)
+        np.fill_diagonal(w, 0.0)
+        check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)
     return w
 
 

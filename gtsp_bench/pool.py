@@ -9,10 +9,24 @@ kills a worker whose solve exceeds the hard limit and starts another.
 
 Runtimes come from :func:`gtsp_bench.registry.run_solver` inside the worker (the solver's own
 ``solve`` call), so process start-up and instance parsing are never counted.
+
+Failures say whose they are (``cause``): a solver that raises gives a ``failed`` record with cause
+``solver``; one that refuses its input by design (an :class:`~gtsp_bench.errors.InputError`, such
+as dp above its memory limit) a ``refused`` record; a worker that dies under a solve (the OOM
+killer, ``kill -9``, a crash in native code) or a solve that runs out of memory is the
+infrastructure's fault: the job is tried again in a fresh worker, up to :data:`MAX_ATTEMPTS`
+times, and only then recorded as ``failed`` with cause ``infrastructure`` (which a later run
+retries).
+
+A worker starts with the caller's import path less its working-directory entry (``python -P``
+and an explicit ``sys.path``), so a file in the user's folder named like a module cannot shadow
+it, and its file descriptor 1 points at stderr: a library that prints cannot reach the runner's
+stdout.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -30,11 +44,18 @@ from typing import Any
 INIT_TIMEOUT_S = 300.0
 #: Thread-pool variables set to 1 in workers (unless already set): jobs x threads <= cores.
 THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+#: Times a job is tried when its worker dies under it or it runs out of memory.
+MAX_ATTEMPTS = 3
+#: Cause of a failure outside the solver's control (see :data:`gtsp_bench.checks.FAILURE_CAUSES`).
+INFRASTRUCTURE = "infrastructure"
 
 
-def failure(note: str, status: str = "failed") -> dict[str, Any]:
-    """A result record for a solve that gave no solution."""
-    return {"status": status, "objective": math.nan, "note": note}
+def failure(note: str, status: str = "failed", cause: str = "solver") -> dict[str, Any]:
+    """A result record for a solve that gave no solution (``cause``: whose fault it was)."""
+    out: dict[str, Any] = {"status": status, "objective": None, "note": note}
+    if status == "failed":
+        out["cause"] = cause
+    return out
 
 
 def _one_line(e: BaseException) -> str:
@@ -57,8 +78,11 @@ def _limit_threads() -> None:
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
     """Solve one task message ``{fingerprint, text, omega, seed, time_limit}`` through the harness.
 
-    The instance JSON is parsed once per fingerprint; any exception becomes a ``failed`` record.
+    The instance JSON is parsed once per fingerprint. An :class:`InputError` becomes a
+    ``refused`` record, a :class:`MemoryError` a ``failed`` one with cause ``infrastructure``, any
+    other exception a ``failed`` one with cause ``solver``.
     """
+    from gtsp_bench.errors import InputError
     from gtsp_bench.parse import parse_json_instance
     from gtsp_bench.registry import run_solver
 
@@ -70,6 +94,10 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
         _limit_threads()
         res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
                          seed=msg["seed"], name=name)
+    except InputError as e:  # the solver declines this input by design
+        out = failure(_one_line(e), "refused")
+    except MemoryError as e:
+        out = failure(f"out of memory: {_one_line(e)}", cause=INFRASTRUCTURE)
     except Exception as e:  # any solver error becomes a row; the run goes on
         out = failure(_one_line(e))
     else:
@@ -88,6 +116,8 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
 def worker_main(fd: int) -> None:
     """Entry point of a worker process: ``fd`` is its end of the socket pair."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the runner handles Ctrl-C and stops workers
+    sys.stdout.flush()
+    os.dup2(2, 1)  # whatever a library prints goes to stderr, never to the caller's stdout
     conn = Connection(fd)
     try:
         name, target, description = conn.recv()
@@ -131,15 +161,22 @@ class _Worker:
     born: float = field(default_factory=time.monotonic)
 
 
+def worker_path() -> list[str]:
+    """The import path of a worker: this process's ``sys.path`` without the empty entry, which
+    stands for the working directory (the worker's ``-P`` keeps Python from adding its own)."""
+    return [p for p in sys.path if p]
+
+
 def _start_worker(name: str, target: str | None, description: str) -> _Worker:
     ours, theirs = socket.socketpair()
     env = dict(os.environ)
     for var in THREAD_VARS:
         env.setdefault(var, "1")
-    env["PYTHONPATH"] = os.pathsep.join(p or os.getcwd() for p in sys.path)
-    code = "import sys; from gtsp_bench.pool import worker_main; worker_main(int(sys.argv[1]))"
+    code = ("import sys, json; sys.path[:] = json.loads(sys.argv[2]); "
+            "from gtsp_bench.pool import worker_main; worker_main(int(sys.argv[1]))")
     try:
-        proc = subprocess.Popen([sys.executable, "-c", code, str(theirs.fileno())],
+        proc = subprocess.Popen([sys.executable, "-P", "-c", code, str(theirs.fileno()),
+                                 json.dumps(worker_path())],
                                 pass_fds=[theirs.fileno()], env=env, stdin=subprocess.DEVNULL)
     finally:
         theirs.close()
@@ -190,15 +227,27 @@ def run_jobs(
     hard_limit
         Seconds after which a solve's worker is killed (the record gets status ``time_limit``).
     on_result
-        Called as ``on_result(job id, record, persist)`` for every job; ``persist`` is ``False``
-        when the solver could not even be built, so that a later run retries it.
+        Called as ``on_result(job id, record, persist)`` once for every job; ``persist`` is
+        ``False`` when the solver could not even be built, so that a later run retries it. A job
+        whose worker died under it, or that ran out of memory, is tried again in a fresh worker
+        (at most :data:`MAX_ATTEMPTS` times in all) before its failure is reported.
     """
     stats = PhaseStats(solver, workers=min(n_workers, len(jobs)))
     if not jobs:
         return stats
     start = time.perf_counter()
     pending = deque(jobs)
+    messages = dict(jobs)
+    attempts: dict[Hashable, int] = {}
     workers = [_start_worker(solver, target, description) for _ in range(stats.workers)]
+
+    def retry(job: Hashable) -> bool:
+        """Queue ``job`` again (first in line) unless it has had its attempts."""
+        attempts[job] = attempts.get(job, 1) + 1
+        if attempts[job] > MAX_ATTEMPTS:
+            return False
+        pending.appendleft((job, messages[job]))
+        return True
 
     def fail_all(note: str) -> None:
         for job in [*(j for j, _ in pending), *(w.job for w in workers if w.job is not None)]:
@@ -239,10 +288,15 @@ def run_jobs(
                     w.ready = True
                     continue
                 if kind == "done":
+                    job, w.job = w.job, None
+                    if payload.get("cause") == INFRASTRUCTURE and retry(job):
+                        _stop_worker(w, kill=True)  # out of memory: start clean
+                        workers.remove(w)
+                        workers.append(_start_worker(solver, target, description))
+                        continue
                     stats.solves += 1
                     if math.isfinite(payload.get("runtime_s", math.nan)):
                         stats.solver_s += payload["runtime_s"]
-                    job, w.job = w.job, None
                     dispatch(w)  # the next solve runs while the result is logged
                     on_result(job, payload, True)
                     continue
@@ -254,11 +308,12 @@ def run_jobs(
                         else f"its worker died (exit code {w.proc.returncode})")
                     fail_all(f"solver could not be built: {reason}")
                     return stats
-                if w.job is not None:
-                    rec = (failure(f"killed: no answer after {hard_limit:g} s", "time_limit")
-                           if kind == "killed" else
-                           failure(f"worker died (exit code {w.proc.returncode})"))
-                    on_result(w.job, rec, True)
+                if w.job is not None and kind == "killed":
+                    on_result(w.job, failure(f"killed: no answer after {hard_limit:g} s",
+                                             "time_limit"), True)
+                elif w.job is not None and not retry(w.job):
+                    on_result(w.job, failure(f"worker died (exit code {w.proc.returncode}) in "
+                                             f"{MAX_ATTEMPTS} attempts", cause=INFRASTRUCTURE), True)
                 if pending:
                     workers.append(_start_worker(solver, target, description))
     finally:

@@ -24,8 +24,15 @@ JSON line each to ``<out>/tmp/runs.jsonl`` (flushed and fsynced; a torn last lin
 interrupted run resumes without redoing anything and experiments share their solves (``runtime``
 re-uses ``ratio-k``). Tasks run solver by solver, each solver in fresh worker processes
 (``forkserver``): highspy and ortools never meet in one process, and a worker that hangs past the
-hard limit is killed without stopping the run. A solver that raises or times out gives a row with
-status ``failed`` / ``time_limit``. Runtimes are the solver's own ``runtime_s`` from
+hard limit is killed without stopping the run. A solver that raises gives a row with status
+``failed`` (cause ``solver``), one that refuses its input by design (an ``InputError``: dp above its
+memory limit, drl on N != 20) ``refused``, one killed at the hard limit ``time_limit`` without an
+answer. A worker that dies under a solve (the OOM killer, ``kill -9``) or a solve that runs out of
+memory is retried (:data:`gtsp_bench.pool.MAX_ATTEMPTS`), then recorded ``failed`` with cause
+``infrastructure``; the next run retries such rows, and ``retry_failed`` (``--retry-failed``) the
+solver's own failures too. Records read back from the log are checked
+(:func:`gtsp_bench.checks.check_log_record`): a bad one is skipped with a warning naming its line,
+and its solve is redone. Runtimes are the solver's own ``runtime_s`` from
 :func:`gtsp_bench.registry.run_solver`, never process start-up. Finally each experiment's tidy CSV
 and PNG are written atomically and the generated blocks of ``<out>/README.md`` are refreshed.
 """
@@ -84,6 +91,8 @@ DP_MAX_K = 12
 #: it is killed (solvers are expected to stop themselves at ``time_limit``).
 HARD_LIMIT_FACTOR = 2.0
 HARD_LIMIT_GRACE_S = 10.0
+#: Bad task-log records named one by one before the rest are counted.
+MAX_SKIP_WARNINGS = 5
 #: Columns of every solve experiment's CSV, in order.
 CSV_COLUMNS = (
     "experiment", "K", "N", "instance", "omega", "solver", "seed", "status", "objective",
@@ -124,6 +133,7 @@ class BenchConfig:
     checkpoint_dir: Path
     fresh: bool = False
     progress: bool = True
+    retry_failed: bool = False
     omegas: tuple[float, ...] = OMEGAS
 
     @property
@@ -188,10 +198,13 @@ def make_config(
     checkpoint_dir: str | os.PathLike[str] | None = None,
     fresh: bool = False,
     progress: bool = True,
+    retry_failed: bool = False,
 ) -> BenchConfig:
     """Validate every option before anything is written.
 
-    ``quick`` changes the defaults only (K = 4, 5; 3 instances; omega 0, .5, .9; output in
+    ``retry_failed`` redoes solves the log records as failed by the solver's own error (those
+    whose cause was the infrastructure are retried anyway). ``quick`` changes the defaults only
+    (K = 4, 5; 3 instances; omega 0, .5, .9; output in
     ``results/quick``); explicit values win.
 
     Raises
@@ -241,7 +254,7 @@ def make_config(
         n_instances=n_inst, n_nodes=n_nodes, seed=int(seed), time_limit=tl, jobs=n_jobs,
         quick=quick, out_dir=Path(out_dir), instance_dir=Path(instance_dir),
         checkpoint_dir=Path(checkpoint_dir) if checkpoint_dir is not None else shipped_checkpoints(),
-        fresh=fresh, progress=progress,
+        fresh=fresh, progress=progress, retry_failed=retry_failed,
         omegas=QUICK_OMEGAS if quick else OMEGAS,
     )
 
@@ -368,30 +381,56 @@ def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str
 class TaskLog:
     """Finished tasks, one JSON object per line, appended with flush and fsync.
 
-    Reading drops a torn last line (a run killed mid-write) and keeps the last record of a key.
+    Reading drops a torn last line (a run killed mid-write), checks every record against the log's
+    schema (:func:`gtsp_bench.checks.check_log_record`) and keeps the last good record of a key. A
+    line that is not JSON or fails the check is skipped, and :attr:`skipped` says which and why
+    (``"<log>:<line>: <reason>"``), so its solve is redone rather than trusted.
     """
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self._file: io.TextIOWrapper | None = None
+        self.skipped: list[str] = []
 
-    def load(self) -> dict[str, dict[str, Any]]:
-        """Records by key; cuts a torn last line off the file."""
+    def load(self, sizes: Mapping[str, Sequence[int]] | None = None) -> dict[str, dict[str, Any]]:
+        """Records by key; cuts a torn last line off the file.
+
+        Parameters
+        ----------
+        sizes
+            Cluster sizes of the instance of each key the caller knows: those records' ``order``
+            and ``heads`` are checked against them.
+        """
+        from gtsp_bench.checks import check_log_record
+
+        self.skipped = []
         if not self.path.exists():
             return {}
-        data = self.path.read_bytes()
+        try:
+            data = self.path.read_bytes()
+        except OSError as e:
+            raise InputError(f"{self.path}: cannot read ({e.strerror})") from None
         end = data.rfind(b"\n") + 1
         if end < len(data):
             with open(self.path, "r+b") as f:
                 f.truncate(end)
         records = {}
-        for line in data[:end].splitlines():
+        sizes = sizes or {}
+        for number, line in enumerate(data[:end].split(b"\n")[:-1], start=1):
+            if not line.strip():
+                continue
             try:
                 rec = json.loads(line)
-            except ValueError:
+            except (ValueError, RecursionError):
+                self.skipped.append(f"{self.path}:{number}: not a JSON record")
                 continue
-            if isinstance(rec, dict) and "key" in rec:
-                records[rec["key"]] = rec
+            try:
+                key = rec.get("key") if isinstance(rec, dict) else None
+                check_log_record(rec, sizes.get(key) if isinstance(key, str) else None)
+            except InputError as e:
+                self.skipped.append(f"{self.path}:{number}: {e}")
+                continue
+            records[rec["key"]] = rec
         return records
 
     def open(self) -> None:
@@ -452,10 +491,15 @@ def _same_tour(a: Mapping[str, Any], b: Mapping[str, Any]) -> bool:
     return oa == ob or oa == ob[::-1]
 
 
+def _number(value: Any) -> float:
+    """A record's number, NaN for a missing one (``None``)."""
+    return math.nan if value is None else float(value)
+
+
 def _row(experiment: str, cell: Cell, inst: StoredInstance, solver: str, reference: str,
          rec: Mapping[str, Any], ref: Mapping[str, Any], time_limit: float) -> dict[str, Any]:
-    obj = float(rec.get("objective", math.nan))
-    ref_ok = ref.get("status") == "optimal" and np.isfinite(ref.get("objective", math.nan))
+    obj = _number(rec.get("objective"))
+    ref_ok = ref.get("status") == "optimal" and np.isfinite(_number(ref.get("objective")))
     optimum = float(ref["objective"]) if ref_ok else math.nan
     notes = [rec.get("note", "")] if rec.get("note") else []
     if not ref_ok:
@@ -565,12 +609,14 @@ def training_figure(df: pd.DataFrame) -> Any:
 # ---------------------------------------------------------------------- the run
 @dataclass
 class RunSummary:
-    """What :func:`run_bench` did."""
+    """What :func:`run_bench` did; ``failed`` and ``refused`` count the run's tasks (run or
+    re-used) that ended without a solution, by a failure or by the solver's refusal."""
 
     tasks: int = 0
     cached: int = 0
     run: int = 0
     failed: int = 0
+    refused: int = 0
     phases: list[PhaseStats] = field(default_factory=list)
     written: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
@@ -596,9 +642,14 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
             if r == "brute" else ""
         say(f"reference optimum: {r} for K = {ks_text(ks)}{note}")
     sets, tasks = plan(config)
-    records = task_log.load()
-    done = {} if config.fresh else records
-    todo = [t for t in tasks.values() if t.key not in done]
+    records = task_log.load({key: tuple(int(n) for n in t.instance.instance.sizes)
+                             for key, t in tasks.items()})
+    for line in task_log.skipped[:MAX_SKIP_WARNINGS]:
+        say(f"warning: {line}; skipped, its solve is redone")
+    if len(task_log.skipped) > MAX_SKIP_WARNINGS:
+        say(f"warning: {config.log_path}: {len(task_log.skipped) - MAX_SKIP_WARNINGS} more bad "
+            f"records skipped")
+    todo = [t for t in tasks.values() if config.fresh or needs_run(records.get(t.key), config)]
     summary.tasks, summary.cached = len(tasks), len(tasks) - len(todo)
     say(f"{len(tasks)} solves, {summary.cached} already in {config.log_path}, {len(todo)} to run "
         f"with {config.jobs} worker(s), time limit {config.time_limit:g} s")
@@ -617,7 +668,6 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
                 transient[task.key] = full
             records[task.key] = full
             summary.run += 1
-            summary.failed += full["status"] == "failed"
             bar.update()
 
         order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
@@ -637,11 +687,42 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
     for solver in sorted({r["solver"] for r in transient.values()}):
         note = next(r["note"] for r in transient.values() if r["solver"] == solver)
         say(f"warning: {solver}: {note} (not recorded: a rerun retries it)")
+    finals = [records[key] for key in tasks if key in records]
+    summary.refused = sum(r["status"] == "refused" for r in finals)
+    summary.failed = sum(not _solved(r) and r["status"] != "refused" for r in finals)
     write_outputs(config, sets, records, summary, say)
     summary.wall_s = time.perf_counter() - t0
     say(f"done in {summary.wall_s:.1f} s: {summary.run} solves run, {summary.cached} re-used, "
-        f"{summary.failed} failed")
+        f"{summary.failed} failed, {summary.refused} refused"
+        + (" (exit code 1: see the failed rows' notes)" if summary.failed else ""))
     return summary
+
+
+def _solved(record: Mapping[str, Any]) -> bool:
+    """Whether a record holds a solution (a finite objective)."""
+    return record.get("objective") is not None and math.isfinite(record["objective"])
+
+
+def failure_cause(record: Mapping[str, Any]) -> str | None:
+    """Whose fault a failed record was: its ``cause``, or for records written before causes were
+    logged, ``"infrastructure"`` when its note says its worker died or memory ran out."""
+    if record.get("status") != "failed":
+        return None
+    if "cause" in record:
+        return str(record["cause"])
+    note = str(record.get("note", ""))
+    outside = note.startswith(("worker died", "MemoryError", "out of memory"))
+    return "infrastructure" if outside else "solver"
+
+
+def needs_run(record: Mapping[str, Any] | None, config: BenchConfig) -> bool:
+    """Whether a task with this log record (``None``: none) is solved (again) by this run: when
+    it has no record, failed for a cause outside the solver, or failed at all with
+    ``retry_failed``."""
+    if record is None:
+        return True
+    cause = failure_cause(record)
+    return cause == "infrastructure" or (cause is not None and config.retry_failed)
 
 
 def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],

@@ -47,6 +47,59 @@ class DieAboveHalf:
         return Greedy().solve(instance, omega)
 
 
+class Banner:
+    """Greedy after writing a banner straight to file descriptor 1, as highspy 1.16 does."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import os
+
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
+
+        os.write(1, b"Running HiGHS 1.16.0: banner on fd 1\nCopyright (c) 2026\n")
+        print("a stray print")
+        return Greedy().solve(instance, omega)
+
+
+#: Environment variable naming the file that holds how many more solves KilledFromOutside kills.
+KILLS_FILE = "GTSP_BENCH_TEST_KILLS"
+
+
+class KilledFromOutside:
+    """While the number in the file ``$GTSP_BENCH_TEST_KILLS`` is > 0, counts it down and kills
+    its own worker with SIGKILL mid-solve (as the OOM killer or ``kill -9`` would); greedy
+    otherwise."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import os
+        import signal
+        from pathlib import Path
+
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
+
+        path = Path(os.environ[KILLS_FILE])
+        left = int(path.read_text())
+        if left > 0:
+            path.write_text(str(left - 1))
+            os.kill(os.getpid(), signal.SIGKILL)
+        return Greedy().solve(instance, omega)
+
+
+class OutOfMemory:
+    """Raises MemoryError, as an allocation beyond the machine's memory does."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        raise MemoryError("Unable to allocate 500. GiB for an array")
+
+
+class Refuses:
+    """Refuses every instance by design (an InputError), as dp above its memory limit does."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        from gtsp_bench.errors import InputError
+
+        raise InputError(f"refuses {instance.name} by design")
+
+
 class FixedTour:
     """Clusters in index order, every head 0: feasible, usually not optimal."""
 
@@ -105,8 +158,11 @@ class UsesTorch(_GreedyAfterImport):
 
 def register() -> None:
     """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-revised, t-highs,
-    t-ortools, t-torch and t-missing (whose class does not exist), all with ``bench=False``."""
+    t-ortools, t-torch, t-banner, t-killed, t-oom, t-refuses and t-missing (whose class does not
+    exist), all with ``bench=False``."""
     for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
+                      ("t-banner", "Banner"), ("t-killed", "KilledFromOutside"),
+                      ("t-oom", "OutOfMemory"), ("t-refuses", "Refuses"),
                       ("t-fixed", "FixedTour"), ("t-revised", "Revised"), ("t-highs", "UsesHighs"),
                       ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),
                       ("t-missing", "NoSuchClass")):

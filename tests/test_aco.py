@@ -96,3 +96,25 @@ def test_cli_bad_option_exits_2(tmp_path, capsys):
     assert "ants must be an integer >= 1" in capsys.readouterr().err
     assert main(["solve", str(path), "--solver", "aco", "--time-limit", "-1"]) == 2
     assert "time limit" in capsys.readouterr().err
+
+
+def test_aco_ls_keeps_a_share_of_its_time_limit_for_the_local_search(monkeypatch):
+    """At its time limit the colony of aco+ls stops at (1 - LS_SHARE) of it, so the local search
+    still has time; plain aco uses the whole limit."""
+    import time
+
+    from gtsp_bench.solvers.heuristics import aco
+
+    seen = {}
+
+    def record(self, problem, *, deadline, seed):
+        seen[type(self).__name__] = deadline - time.perf_counter()
+        return real(self, problem, deadline=deadline, seed=seed)
+
+    real = aco.Aco.search
+    monkeypatch.setattr(aco.Aco, "search", record)
+    inst = generate_instance(4, 5, seed=0)
+    run_solver(get_solver("aco", iterations=1), inst, 0.5, time_limit=100.0)
+    run_solver(get_solver("aco+ls", iterations=1), inst, 0.5, time_limit=100.0)
+    assert 99.0 < seen["Aco"] <= 100.0
+    assert 100.0 * (1 - aco.LS_SHARE) - 1.0 < seen["AcoLS"] <= 100.0 * (1 - aco.LS_SHARE)

@@ -1,19 +1,27 @@
-"""Option validation helpers and the default time limit."""
+"""Option validation helpers, the default time limit, the numbers of an instance, memory and the
+runner's log records."""
 
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from gtsp_bench.checks import (
+    MAX_TOUR_COST,
+    check_finite_array,
     check_float,
     check_int,
+    check_log_record,
     check_mapping,
     default_time_limit,
     parse_ks,
     parse_omegas,
+    tour_cost_bound,
 )
 from gtsp_bench.errors import InputError
 
@@ -89,3 +97,64 @@ def test_parse_omegas():
     for bad in ("0.5,x", "1.5", "", "nan", "0.5,"):
         with pytest.raises(InputError, match="bad omegas"):
             parse_omegas(bad)
+
+
+def test_check_finite_array_names_the_entry_and_the_kind():
+    """nan is named as nan, inf as infinite, a huge finite value with the bound; good passes."""
+    check_finite_array("w", np.array([[0.0, 1.0], [1.0, 0.0]]), 10.0)
+    with pytest.raises(InputError, match=r"^w\[1\]\[0\] is nan \(not a number\)$"):
+        check_finite_array("w", np.array([[0.0, 1.0], [math.nan, 0.0]]), 10.0)
+    with pytest.raises(InputError, match=r"^w\[1\] = -inf is infinite"):
+        check_finite_array("w", np.array([0.0, -math.inf]), 10.0)
+    with pytest.raises(InputError, match=r"^w\[0\] = 11 is beyond ±10"):
+        check_finite_array("w", np.array([11.0]), 10.0)
+
+
+def test_tour_cost_bound_is_an_upper_bound():
+    """No tour of a generated instance costs more than the bound, for omega 0 and 1."""
+    from gtsp_bench.energy import evaluate
+    from gtsp_bench.generator import generate_instance
+
+    inst = generate_instance(5, 6, seed=3)
+    bound = tour_cost_bound(inst)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        order = rng.permutation(5).tolist()
+        heads = rng.integers(0, 6, size=5).tolist()
+        for omega in (0.0, 1.0):
+            assert evaluate(inst, omega, order, heads).objective <= bound
+    assert bound < MAX_TOUR_COST
+
+
+def test_memory_limit_follows_ulimit_v():
+    """Under `ulimit -v 1 GiB` the limit is at most 1 GiB; check_memory refuses beyond it."""
+    code = (
+        "import resource\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (2**30, 2**30))\n"
+        "from gtsp_bench.checks import memory_limit_bytes, check_memory\n"
+        "from gtsp_bench.errors import InputError\n"
+        "assert 0 < memory_limit_bytes() <= 2**30, memory_limit_bytes()\n"
+        "try:\n"
+        "    check_memory('a table', 2**31, 'try less')\n"
+        "except InputError as e:\n"
+        "    print(e)\n"
+    )
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                          env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("a table needs about 2 GiB of memory, more than the ")
+    assert proc.stdout.rstrip().endswith("GiB available; try less")
+
+
+def test_check_log_record_accepts_a_real_record():
+    """A record as the runner writes it passes unchanged, with and without the cluster sizes."""
+    rec = {"key": "i#ab|dp@v1|w=0.3|seed=0|tl=10", "solver": "dp", "omega": 0.3, "seed": 0,
+           "status": "optimal", "objective": 12.5, "order": [2, 0, 1], "heads": [0, 1, 0],
+           "lower_bound": 12.5, "runtime_s": 0.1, "note": ""}
+    assert check_log_record(rec) is rec
+    assert check_log_record(rec, (1, 2, 1)) is rec
+    with pytest.raises(InputError, match="heads names a node outside its cluster"):
+        check_log_record(rec, (1, 1, 1))
+    with pytest.raises(InputError, match="is not NAME#HASH"):
+        check_log_record({**rec, "key": "i|dp"})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -11,7 +12,7 @@ import pytest
 
 from gtsp_bench.cli import main
 
-from .conftest import GTSPLIB
+from .conftest import GTSPLIB, REPO
 
 KEYS = ["instance", "solver", "omega", "order", "heads", "objective", "energy", "distance",
         "status", "lower_bound", "runtime_s"]
@@ -193,3 +194,111 @@ def test_console_script_is_installed():
     proc = subprocess.run([str(exe), "--help"], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0
     assert "generalized TSP" in proc.stdout
+
+
+def _cli_subprocess(argv: list[str], *, setup: str = "", limit_bytes: int | None = None,
+                    cwd: Path | None = None) -> subprocess.CompletedProcess:
+    """Run ``main(argv)`` in a fresh interpreter (after ``setup``), optionally under ``ulimit -v``."""
+    code = f"import sys\n{setup}\nfrom gtsp_bench.cli import main\nsys.exit(main({argv!r}))\n"
+
+    def cap() -> None:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (limit_bytes, limit_bytes))
+
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          cwd=cwd or REPO, env=env, preexec_fn=cap if limit_bytes else None)
+
+
+def test_solve_json_stays_one_object_when_a_library_prints_on_fd_1(k4):
+    """A solver writing a banner straight to file descriptor 1 and print()ing (as highspy 1.16
+    does): stdout is still exactly one JSON object; the noise goes to stderr."""
+    setup = "from tests.runner_solvers import register\nregister()"
+    proc = _cli_subprocess(["solve", str(k4), "-s", "t-banner", "--json"], setup=setup)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    assert list(result) == KEYS and result["solver"] == "t-banner"
+    assert "banner on fd 1" in proc.stderr and "a stray print" in proc.stderr
+    proc = _cli_subprocess(["solve", str(k4), "-s", "t-banner"], setup=setup)
+    assert proc.returncode == 0 and proc.stdout.startswith("instance   ")
+    assert "fd 1" not in proc.stdout and "stray" not in proc.stdout
+
+
+def test_stdout_is_restored_after_each_command(tmp_path, capfd):
+    """main() in-process (fd-level capture): the answer reaches stdout, fd 1 is stdout again."""
+    k3 = tmp_path / "k3.json"
+    assert main(["generate", "-k", "3", "-o", str(k3)]) == 0
+    assert capfd.readouterr().out == ""
+    assert main(["solve", str(k3), "-s", "greedy", "--json"]) == 0
+    out, _ = capfd.readouterr()
+    assert json.loads(out)["solver"] == "greedy"
+    os.write(1, b"after\n")
+    assert capfd.readouterr().out == "after\n"
+
+
+def _far_point_instance(tmp_path: Path) -> Path:
+    path = tmp_path / "far.json"
+    path.write_text(json.dumps({"depot": [0, 0], "clusters": [[[0, 0], [1e300, 1e300]], [[5, 5]],
+                                                            [[9, 1]]]}))
+    return path
+
+
+def test_every_solver_refuses_a_point_at_1e300_naming_the_file(capsys, tmp_path):
+    """A point at (1e300, 1e300) is finite but no distance or energy of it is: every registered
+    solver exits 2 with one line naming the file and the value."""
+    from gtsp_bench.registry import solver_names
+
+    path = _far_point_instance(tmp_path)
+    for name in solver_names():
+        code = main(["solve", str(path), "-s", name, "--json"])
+        out, err = capsys.readouterr()
+        assert code == 2 and out == "", (name, err)
+        assert err.count("\n") == 1 and err.startswith(f"gtsp-bench: error: {path}: clusters[0][1]")
+        assert "1e+300" in err
+
+
+def test_generate_refuses_a_size_it_cannot_hold_at_once(capsys, tmp_path, monkeypatch):
+    """-n 100000000 with 8 GiB available: one line before any allocation, naming a size that
+    fits, and no file."""
+    from gtsp_bench import checks
+
+    monkeypatch.setattr(checks, "memory_limit_bytes", lambda: 8 * 2**30)
+    target = tmp_path / "big.json"
+    code = main(["generate", "-k", "4", "-n", "100000000", "-o", str(target)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert "needs about 119 GiB of memory, more than the 8 GiB available" in err
+    assert "use at most about 6710886 nodes per cluster (--nodes)" in err
+    assert not target.exists()
+
+
+def test_generate_refuses_under_a_memory_cap(tmp_path):
+    """The same under `ulimit -v` (2 GiB), whatever the machine has."""
+    proc = _cli_subprocess(["generate", "-k", "4", "-n", "100000000", "-o", str(tmp_path / "b.json")],
+                           limit_bytes=2 * 2**30)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert "GiB of memory, more than the" in proc.stderr
+
+
+def test_dp_above_the_machine_memory_is_one_line(tmp_path, capsys):
+    """dp -p max_memory_gb=500 on K = 25 under a 3 GiB cap: its 187 GiB table cannot be made;
+    exit 2 with one line naming what ran out and what to try instead."""
+    k25 = tmp_path / "k25.json"
+    assert main(["generate", "-k", "25", "-o", str(k25)]) == 0
+    capsys.readouterr()
+    proc = _cli_subprocess(["solve", str(k25), "-s", "dp", "-p", "max_memory_gb=500"],
+                           limit_bytes=3 * 2**30)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert proc.stderr.startswith("gtsp-bench: error: out of memory (dp's 188 GiB table for")
+    assert "max_memory_gb below 188" in proc.stderr
+
+
+def test_memory_errors_are_one_line_per_command():
+    """Each command's out-of-memory line names the allocation and a smaller setting."""
+    from gtsp_bench.cli import _memory_message
+
+    msg = _memory_message("train", MemoryError("Unable to allocate 3 GiB\nmore"))
+    assert msg == "out of memory (Unable to allocate 3 GiB); use a smaller --batch or --val-size"
+    assert _memory_message("bench", MemoryError()).startswith("out of memory (an allocation failed)")

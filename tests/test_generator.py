@@ -98,3 +98,22 @@ def test_instance_set_is_prefix_stable():
     np.testing.assert_array_equal(small[1].coords, big[1].coords)
     assert big[4].name == "uav-K4-N20-s9-004"
     assert not np.array_equal(big[0].coords, big[1].coords)
+
+
+def test_a_size_beyond_the_available_memory_is_refused_before_allocating(monkeypatch):
+    """K x N nodes whose estimate exceeds the memory available: InputError at once, naming a
+    size that fits; a size within it is generated."""
+    from gtsp_bench import checks, generator
+
+    monkeypatch.setattr(checks, "memory_limit_bytes", lambda: 2**30)
+    start = time.perf_counter()
+    with pytest.raises(InputError, match=r"4 clusters x 100000000 nodes needs about 119 GiB of "
+                                         r"memory, more than the 1 GiB available; use at most about "
+                                         r"838860 nodes per cluster"):
+        generate_instance(4, 100_000_000)
+    assert time.perf_counter() - start < 1.0
+    fits = 2**30 // (generator.BYTES_PER_NODE * 4)
+    with pytest.raises(InputError, match="needs about"):
+        generator.check_generator_memory(4, fits + 1)
+    generator.check_generator_memory(4, fits)
+    assert generate_instance(2, 3).n_nodes == 6

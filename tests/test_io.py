@@ -102,6 +102,17 @@ def test_atomic_write_gives_ordinary_permissions(tmp_path):
         os.umask(umask)
 
 
+def test_atomic_write_leaves_the_process_umask_alone(tmp_path, monkeypatch):
+    """The kernel applies the umask to the new file; the process umask is never set (setting it,
+    even for a moment, races with other threads creating files)."""
+    def no_umask(mask):
+        raise AssertionError("os.umask called")
+
+    monkeypatch.setattr(os, "umask", no_umask)
+    atomic_write_text(tmp_path / "a.txt", "x")
+    assert (tmp_path / "a.txt").read_text() == "x"
+
+
 def test_atomic_write_onto_a_directory_is_an_input_error(tmp_path):
     """Writing to a path that is a directory names the path; no temporary file is left."""
     folder = tmp_path / "out.json"

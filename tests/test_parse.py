@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import gzip
 import json
+import os
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.parse import (
@@ -229,7 +232,7 @@ def test_explicit_diagonal_is_ignored():
         ("LOWER_DIAG_ROW", list(range(11)), "has 11 values, LOWER_DIAG_ROW needs 10"),
         ("FUNCTION", [], "unsupported EDGE_WEIGHT_FORMAT 'FUNCTION'"),
         ("UPPER_ROW", [1, 2, 3, 4, 5, "x"], "not a number"),
-        ("UPPER_ROW", [1, 2, 3, 4, 5, "inf"], "NaN or infinite"),
+        ("UPPER_ROW", [1, 2, 3, 4, 5, "inf"], "= inf is infinite"),
         ("FULL_MATRIX", [0, 1, 2, 3, 9, 0, 4, 5, 2, 4, 0, 6, 3, 5, 6, 0], "not symmetric"),
     ],
 )
@@ -300,3 +303,126 @@ def test_tour_of_unknown_nodes_or_instances():
     uav = parse_json_instance(_text())
     with pytest.raises(InputError, match="was not read from a GTSPLIB file"):
         tour_to_solution(uav, [1, 2])
+
+
+def test_nan_in_an_explicit_matrix_is_named_as_such():
+    """A nan weight is reported as nan with its place, not as an asymmetric matrix."""
+    with pytest.raises(InputError, match=r"EDGE_WEIGHT_SECTION\[1\]\[2\] is nan \(not a number\)"):
+        parse_gtsp(EXPLICIT.replace("1 0 3", "1 0 nan"))
+    with pytest.raises(InputError, match=r"EDGE_WEIGHT_SECTION\[2\]\[0\] = inf is infinite"):
+        parse_gtsp(EXPLICIT.replace("2 3 0", "inf 3 0"))
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    (_text(clusters=[[[0, 0], [1e300, 1e300]], [[5, 6]]]), r"clusters\[0\]\[1\]\[0\] = 1e\+300 is beyond"),
+    (_text(depot=[-2e9, 0]), r"depot\[0\] = -2e\+09 is beyond"),
+    (_text(clusters=[[[0, 0], [9e8, 9e8]], [[5, 6]]]), "a tour's energy could reach"),
+    (_text(params={"p_ch_dbm": 1e300}), "p_ch_w = inf"),
+    (_text(params={"bandwidth": 1e-300}), r"a tour.s energy could reach 7.77165e\+304"),
+])
+def test_numbers_too_large_to_order_tours_are_refused(text, message):
+    """Finite but huge coordinates, or parameters whose derived energies overflow, are named."""
+    with pytest.raises(InputError, match=message):
+        parse_json_instance(text)
+
+
+def test_gtsplib_coordinates_near_the_float_limit_are_refused():
+    """Nodes at +-1e308 (finite) would make every distance infinite: refused at load."""
+    with pytest.raises(InputError, match=r"clusters\[0\]\[1\]\[0\] = 1e\+308 is beyond"):
+        parse_gtsp(SMALL.replace("3 6 8", "3 1e308 -1e308"))
+
+
+# ---------------------------------------------------------------------- fuzzing
+# GTSP_BENCH_FUZZ_EXAMPLES=2000 make test runs many more examples than the default.
+FUZZ = settings(max_examples=int(os.environ.get("GTSP_BENCH_FUZZ_EXAMPLES", "40")), deadline=None,
+                database=None, suppress_health_check=list(HealthCheck))
+
+_json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-(10**20), 10**20) | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=12,
+)
+_numbers = st.floats() | st.integers(-(10**30), 10**30) | st.sampled_from([1e300, -1e308, 1e9, 5e-324])
+
+
+def _loads_or_input_error(parse, text: str) -> None:
+    """``parse(text)`` gives an instance whose tours all price to finite numbers, without a
+    numpy warning, or raises InputError; anything else fails the test."""
+    from gtsp_bench.energy import evaluate
+
+    try:
+        inst = parse(text)
+    except InputError:
+        return
+    k = inst.n_clusters
+    with np.errstate(over="raise", invalid="raise"):
+        ev = evaluate(inst, 0.5, list(range(k)), [len(c) - 1 for c in inst.clusters])
+    assert np.isfinite(ev.objective)
+
+
+@FUZZ
+@given(value=_json_values)
+def test_fuzz_any_json_value_loads_or_is_an_input_error(value):
+    """Any JSON value at all: an instance, or InputError."""
+    _loads_or_input_error(parse_json_instance, json.dumps(value))
+
+
+@FUZZ
+@given(data=st.data())
+def test_fuzz_mutated_json_instances_load_or_are_input_errors(data):
+    """A valid instance with one part replaced (a coordinate, a cluster, the depot, a parameter,
+    any key) by a random number or JSON value, or its text cut or spliced."""
+    inst = json.loads(_text(params={"height": 60.0}))
+    target = data.draw(st.sampled_from(["coordinate", "cluster", "depot", "param", "key", "text"]))
+    if target == "coordinate":
+        k = data.draw(st.integers(0, 1))
+        i = data.draw(st.integers(0, len(inst["clusters"][k]) - 1))
+        inst["clusters"][k][i][data.draw(st.integers(0, 1))] = data.draw(_numbers)
+    elif target == "cluster":
+        inst["clusters"][data.draw(st.integers(0, 1))] = data.draw(_json_values)
+    elif target == "depot":
+        inst["depot"] = data.draw(st.lists(_numbers, min_size=0, max_size=3) | _json_values)
+    elif target == "param":
+        name = data.draw(st.sampled_from(["height", "p_ch_dbm", "bandwidth", "eps_mp", "v_uav",
+                                          "message_bits", "noise_dbm_per_hz", "speed"]))
+        inst["params"][name] = data.draw(_numbers | _json_values)
+    elif target == "key":
+        inst[data.draw(st.sampled_from(["name", "meta", "clusters", "params", "extra"]))] = \
+            data.draw(_json_values)
+    text = json.dumps(inst)
+    if target == "text":
+        cut = data.draw(st.integers(0, len(text)))
+        text = text[:cut] + data.draw(st.text(max_size=6)) + text[cut + data.draw(st.integers(0, 4)):]
+    _loads_or_input_error(parse_json_instance, text)
+
+
+@FUZZ
+@given(data=st.data())
+def test_fuzz_mutated_gtsplib_text_loads_or_is_an_input_error(data):
+    """.gtsp text (coordinates and an explicit matrix) with lines dropped, repeated or
+    replaced, or tokens replaced by random numbers or text."""
+    lines = data.draw(st.sampled_from([SMALL, EXPLICIT])).splitlines()
+    for _ in range(data.draw(st.integers(1, 3))):
+        i = data.draw(st.integers(0, len(lines) - 1))
+        action = data.draw(st.sampled_from(["drop", "repeat", "replace", "token"]))
+        if action == "drop":
+            del lines[i]
+        elif action == "repeat":
+            lines.insert(i, lines[i])
+        elif action == "replace":
+            lines[i] = data.draw(st.text(max_size=12))
+        else:
+            tokens = lines[i].split() or [""]
+            j = data.draw(st.integers(0, len(tokens) - 1))
+            tokens[j] = str(data.draw(_numbers | st.text(max_size=5) | st.integers(-3, 10)))
+            lines[i] = " ".join(tokens)
+        if not lines:
+            break
+    _loads_or_input_error(parse_gtsp, "\n".join(lines))
+
+
+@FUZZ
+@given(text=st.text(max_size=200))
+def test_fuzz_any_text_is_gtsplib_or_an_input_error(text):
+    """Arbitrary text: a .gtsp instance, or InputError."""
+    _loads_or_input_error(parse_gtsp, text)

@@ -3,15 +3,19 @@ that cannot be built. (test_runner covers hanging solvers and the runner around 
 
 from __future__ import annotations
 
-import math
+import json
+import os
+import subprocess
+import sys
 
 from gtsp_bench.solvers.heuristics.greedy import Greedy
 
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.parse import format_json_instance
-from gtsp_bench.pool import run_jobs, solve_message
+from gtsp_bench.pool import MAX_ATTEMPTS, run_jobs, solve_message, worker_path
 
-from .runner_solvers import Crash
+from .conftest import REPO
+from .runner_solvers import KILLS_FILE, Crash, OutOfMemory, Refuses
 
 INSTANCE = generate_instance(3, 4, seed=1)
 
@@ -22,31 +26,88 @@ def _msg(omega: float, instance=INSTANCE) -> dict:
 
 
 def test_solve_message_gives_a_record_or_a_one_line_failure():
-    """A good solve gives the checked numbers; an exception gives status 'failed' with its
-    one-line description; the instance text is parsed once per fingerprint."""
+    """A good solve gives the checked numbers; an exception gives status 'failed' (cause
+    'solver') with its one-line description, an input the solver declines 'refused', running
+    out of memory 'failed' with cause 'infrastructure'; the instance text is parsed once per
+    fingerprint."""
     cache: dict = {}
     rec = solve_message(Greedy(), "greedy", _msg(0.4), cache)
     assert rec["status"] == "feasible" and sorted(rec["order"]) == [0, 1, 2]
     assert rec["objective"] > 0 and rec["runtime_s"] >= 0 and list(cache) == [INSTANCE.name]
     bad = solve_message(Crash(), "crash", _msg(0.4), cache)
-    assert bad["status"] == "failed" and math.isnan(bad["objective"])
+    assert bad["status"] == "failed" and bad["objective"] is None and bad["cause"] == "solver"
     assert bad["note"] == "RuntimeError: boom"
     omega = solve_message(Greedy(), "greedy", _msg(1.5), cache)
-    assert omega["status"] == "failed" and "omega must be in [0, 1]" in omega["note"]
+    assert omega["status"] == "refused" and "omega must be in [0, 1]" in omega["note"]
+    refused = solve_message(Refuses(), "refuses", _msg(0.4), cache)
+    assert refused["status"] == "refused" and "cause" not in refused
+    oom = solve_message(OutOfMemory(), "oom", _msg(0.4), cache)
+    assert oom["status"] == "failed" and oom["cause"] == "infrastructure"
+    assert oom["note"].startswith("out of memory: MemoryError: Unable to allocate")
 
 
-def test_a_worker_that_dies_mid_solve_gives_a_failed_row_and_the_rest_go_on():
-    """The job whose worker died is a persisted 'failed' record naming the exit code; a fresh
-    worker replaces the dead one (here the only one) for the remaining jobs."""
+def test_a_worker_that_always_dies_is_retried_then_failed_and_the_rest_go_on():
+    """A job whose worker dies every time is tried MAX_ATTEMPTS times, then reported once as a
+    persisted 'failed' record (cause 'infrastructure') naming the exit code; fresh workers replace
+    the dead ones (here the only one) for the remaining jobs."""
     got: dict = {}
+    calls: list = []
     jobs = [(i, _msg(w)) for i, w in enumerate([0.1, 0.9, 0.2, 0.3, 0.4])]
-    stats = run_jobs("t-die", "tests.runner_solvers:DieAboveHalf", "test", jobs, 1, 60.0,
-                     lambda job, rec, persist: got.__setitem__(job, (rec, persist)))
-    assert sorted(got) == [0, 1, 2, 3, 4]
+
+    def on_result(job, rec, persist):
+        calls.append(job)
+        got[job] = (rec, persist)
+
+    stats = run_jobs("t-die", "tests.runner_solvers:DieAboveHalf", "test", jobs, 1, 60.0, on_result)
+    assert sorted(calls) == [0, 1, 2, 3, 4]
     rec, persist = got[1]
-    assert rec["status"] == "failed" and rec["note"] == "worker died (exit code 3)" and persist
+    assert rec["status"] == "failed" and rec["cause"] == "infrastructure" and persist
+    assert rec["note"] == f"worker died (exit code 3) in {MAX_ATTEMPTS} attempts"
     assert all(got[j][0]["status"] == "feasible" and got[j][1] for j in (0, 2, 3, 4))
     assert stats.solves == 4 and stats.workers == 1
+
+
+def test_a_worker_killed_mid_solve_is_retried_in_a_fresh_worker(tmp_path, monkeypatch):
+    """SIGKILL under a solve (the OOM killer, kill -9): the job is solved again by a new worker
+    and reported once, solved; nothing of the dead attempt is reported."""
+    kills = tmp_path / "kills"
+    kills.write_text("2")
+    monkeypatch.setenv(KILLS_FILE, str(kills))
+    got: dict = {}
+    calls: list = []
+
+    def on_result(job, rec, persist):
+        calls.append(job)
+        got[job] = rec
+
+    run_jobs("t-killed", "tests.runner_solvers:KilledFromOutside", "test",
+             [(0, _msg(0.1)), (1, _msg(0.2))], 1, 60.0, lambda job, rec, p: on_result(job, rec, p))
+    assert sorted(calls) == [0, 1] and kills.read_text() == "0"
+    assert all(rec["status"] == "feasible" for rec in got.values())
+
+
+def test_workers_print_nothing_on_stdout_and_ignore_the_working_directory(tmp_path):
+    """A solver writing to fd 1 in a worker does not reach the caller's stdout; a module in the
+    caller's working directory named like one the worker imports does not shadow it."""
+    (tmp_path / "gtsp_bench.py").write_text("raise SystemExit('shadowed')\n")
+    (tmp_path / "numpy.py").write_text("raise SystemExit('shadowed')\n")
+    code = (
+        "import sys, json\n"
+        f"sys.path[:0] = [{str(REPO)!r}]\n"
+        "from gtsp_bench.pool import run_jobs\n"
+        "from tests.test_pool import _msg\n"
+        "got = {}\n"
+        "run_jobs('t-banner', 'tests.runner_solvers:Banner', 'test', [(0, _msg(0.3))], 1, 60.0,\n"
+        "         lambda job, rec, p: got.__setitem__(job, rec))\n"
+        "sys.stdout.write(json.dumps(got[0]['status']))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    proc = subprocess.run([sys.executable, "-P", "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout) == "feasible"
+    assert "banner on fd 1" in proc.stderr and "a stray print" in proc.stderr
+    assert "" not in worker_path()
 
 
 def test_a_solver_that_cannot_be_built_fails_every_job_unpersisted():

@@ -106,3 +106,27 @@ def test_bad_options_rejected(options):
     """Invalid options raise InputError."""
     with pytest.raises(InputError):
         get_solver("pyvrp", **options)
+
+
+def test_costs_that_would_overflow_the_integer_sums_are_refused(monkeypatch):
+    """Costs whose integer scaling would overflow PyVRP's int64 sums, that cannot be scaled (a
+    subnormal largest cost) or that are not finite give one InputError line, never a wrong tour."""
+    from gtsp_bench.solvers.peers import pyvrp as peer
+
+    problem = price(generate_instance(3, 2, seed=0), 0.5)
+    assert folded_costs(problem)[0].max() > 0
+    monkeypatch.setattr(peer, "MAX_TOUR_UNITS", 10)
+    with pytest.raises(InputError, match="would overflow PyVRP's 64-bit sums"):
+        folded_costs(problem)
+    monkeypatch.undo()
+    tiny = Instance(name="tiny", clusters=(np.array([[0.0, 0.0]]), np.array([[1.0, 0.0]])),
+                    params=None, edge_weight_type="EXPLICIT",
+                    weights=np.array([[0.0, 1e-320], [1e-320, 0.0]]))
+    with pytest.raises(InputError, match="would overflow PyVRP's 64-bit sums"):
+        folded_costs(price(tiny, None))
+    far = Instance(name="far", clusters=(np.array([[0.0, 0.0]]), np.array([[1e308, -1e308]])),
+                   params=None, edge_weight_type="EUC_2D")
+    with np.errstate(over="ignore"):  # built directly: a file would be refused at load
+        far_problem = price(far, None)
+    with pytest.raises(InputError, match="not finite numbers"):
+        folded_costs(far_problem)

@@ -15,6 +15,8 @@ import matplotlib
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtsp_bench import runner
 from gtsp_bench.cli import main
@@ -224,8 +226,9 @@ def test_killed_run_resumes(tmp_path):
 
 
 def test_failing_and_hanging_solvers_become_rows(tmp_path, monkeypatch):
-    """A solver that raises gives 'failed' rows, one that hangs is killed ('time_limit'), one that
-    cannot be built gives 'failed' rows that are not logged; the other solvers' rows are fine."""
+    """A solver that raises gives 'failed' rows, one that hangs is killed ('time_limit' without an
+    answer), one that cannot be built gives 'failed' rows that are not logged; the other solvers'
+    rows are fine. Every row without an answer counts as failed."""
     monkeypatch.setattr(runner, "HARD_LIMIT_GRACE_S", 0.5)
     config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=2,
                      solvers="greedy,t-crash,t-hang,t-missing", time_limit=0.2, jobs=2)
@@ -242,7 +245,8 @@ def test_failing_and_hanging_solvers_become_rows(tmp_path, monkeypatch):
     assert by["t-missing"]["note"].str.contains("could not be built").all()
     logged = {json.loads(line)["solver"] for line in _log_lines(config)}
     assert "t-missing" not in logged and {"t-crash", "t-hang", "greedy"} <= logged
-    assert summary.failed == len(by["t-crash"]) + len(by["t-missing"])
+    assert summary.failed == len(by["t-crash"]) + len(by["t-hang"]) + len(by["t-missing"])
+    assert summary.refused == 0
 
 
 def test_highspy_ortools_torch_solvers_share_a_run(tmp_path):
@@ -282,19 +286,88 @@ def test_instance_sets_are_reused_and_checked(tmp_path, capsys):
         runner.load_instance_set(config, 3, 2)
 
 
+def _record(name: str, objective: float = 10.0, **kw) -> dict:
+    """A well-formed task-log record of a greedy solve on a 2-cluster instance ``name``."""
+    return {"key": f"{name}#0123|greedy|w=0.5|seed=0|tl=10", "instance": name, "solver": "greedy",
+            "omega": 0.5, "seed": 0, "time_limit": 10.0, "status": "feasible",
+            "objective": objective, "order": [1, 0], "heads": [0, 2], "note": "", **kw}
+
+
 def test_task_log_drops_torn_line(tmp_path):
     """A torn last line is cut off; later appends start on a fresh line; the last record wins."""
     log = TaskLog(tmp_path / "runs.jsonl")
-    log.append({"key": "a", "v": 1})
-    log.append({"key": "b", "v": 1})
+    a, b = _record("a"), _record("b")
+    log.append(a)
+    log.append(b)
     log.close()
     with open(log.path, "a") as f:
         f.write('{"key": "c", "v"')
-    assert set(log.load()) == {"a", "b"}
-    log.append({"key": "a", "v": 2})
+    assert set(log.load()) == {a["key"], b["key"]}
+    log.append({**a, "objective": 9.0})
     log.close()
     records = log.load()
-    assert records["a"]["v"] == 2 and len(log.path.read_text().splitlines()) == 3
+    assert records[a["key"]]["objective"] == 9.0 and len(log.path.read_text().splitlines()) == 3
+    assert log.skipped == []
+
+
+@pytest.mark.parametrize("bad, reason", [
+    ({"key": ["x"]}, "'key' is not a non-empty string"),
+    ({**_record("a"), "objective": "abc"}, "objective 'abc' of a feasible solve is not a finite"),
+    ({"key": _record("a")["key"]}, "solver None does not match the key"),
+    ({**_record("a"), "objective": float("inf")}, "not a finite number"),
+    ({**_record("a"), "status": "done"}, "status 'done' is not one of"),
+    ({**_record("a"), "solver": "dp"}, "solver 'dp' does not match the key"),
+    ({**_record("a"), "omega": 0.3}, "omega 0.3 does not match the key"),
+    ({**_record("a"), "order": [0, 0]}, "order is not a permutation"),
+    ({**_record("a"), "order": [0, 1, 2], "heads": [0, 0, 0]}, "order has 3 entries, not 2"),
+    ({**_record("a"), "heads": [0]}, "heads has 1 entries, not 2"),
+    ({**_record("a"), "heads": [0, 3]}, "heads names a node outside its cluster"),
+    ({**_record("a"), "order": [True, 0]}, "order is not a list of integers"),
+    ({**_record("a"), "status": "failed"}, "objective 10.0 of a failed solve is not null"),
+    ({**_record("a"), "status": "failed", "objective": None}, "without an objective has a tour"),
+    ({**_record("a"), "runtime_s": "fast"}, "runtime_s 'fast' is not a number"),
+    ({**_record("a"), "status": "failed", "objective": None, "order": [], "heads": [],
+      "cause": "cosmic rays"}, "cause 'cosmic rays' is not one of"),
+    ([1, 2], "not a JSON object"),
+])
+def test_task_log_skips_bad_records_with_a_warning(tmp_path, bad, reason):
+    """A record of the wrong shape (the key a list, a text objective, a bare key, a tour of the
+    wrong length, ...) is skipped and named by line; the good record before it stays."""
+    log = TaskLog(tmp_path / "runs.jsonl")
+    good = _record("a")
+    log.append(good)
+    log.close()
+    with open(log.path, "a") as f:
+        f.write(json.dumps(bad) + "\n")
+    records = log.load({good["key"]: (1, 3)})
+    assert records == {good["key"]: good}
+    assert len(log.skipped) == 1 and log.skipped[0].startswith(f"{log.path}:2: ")
+    assert reason in log.skipped[0]
+
+
+def test_task_log_accepts_failures_old_and_new(tmp_path):
+    """Failures with a null objective, older ones with NaN, refusals, and a time_limit row killed
+    without an answer all load; an old 'worker died' note counts as the infrastructure's fault."""
+    log = TaskLog(tmp_path / "runs.jsonl")
+    base = {k: v for k, v in _record("a").items() if k not in ("order", "heads", "objective")}
+    rows = [
+        {**base, "key": base["key"] + "1", "status": "failed", "objective": None, "cause": "solver"},
+        {**base, "key": base["key"] + "2", "status": "failed", "objective": float("nan"),
+         "note": "worker died (exit code -9)"},
+        {**base, "key": base["key"] + "3", "status": "refused", "objective": None},
+        {**base, "key": base["key"] + "4", "status": "time_limit", "objective": None},
+    ]
+    for row in rows:
+        log.append(row)
+    log.close()
+    records = log.load()
+    assert len(records) == 4 and log.skipped == []
+    causes = [runner.failure_cause(records[r["key"]]) for r in rows]
+    assert causes == ["solver", "infrastructure", None, None]
+    config = _config(tmp_path, ks="3")
+    assert [runner.needs_run(records[r["key"]], config) for r in rows] == [False, True, False, False]
+    retry = _config(tmp_path, ks="3", retry_failed=True)
+    assert [runner.needs_run(records[r["key"]], retry) for r in rows] == [True, True, False, False]
 
 
 def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
@@ -331,3 +404,135 @@ def test_unwritable_output_folder_fails_before_any_work(tmp_path, capsys):
     assert code == 2
     assert err == f"gtsp-bench: error: {blocker}/tmp/runs.jsonl: cannot write (Not a directory)\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def _csv_without_runtimes(path: Path) -> pd.DataFrame:
+    return pd.read_csv(path).drop(columns=["runtime_s"])
+
+
+def test_damaged_log_records_are_redone_and_give_the_same_csv(tmp_path, capsys):
+    """Each bad record of the log (a list key, a text objective, a line holding only the
+    reference's key) is skipped with one warning naming its line; the run exits 0 and writes the
+    same table as an undamaged run."""
+    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "2",
+            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    csv = tmp_path / "out" / "ratio-k.csv"
+    clean = _csv_without_runtimes(csv)
+    log = tmp_path / "out" / "tmp" / "runs.jsonl"
+    lines = log.read_text().splitlines()
+    records = [json.loads(line) for line in lines]
+    dp = next(i for i, r in enumerate(records) if r["solver"] == "dp")
+    greedy = next(i for i, r in enumerate(records) if r["solver"] == "greedy")
+    damaged = list(lines)
+    damaged[dp] = json.dumps({"key": records[dp]["key"]})
+    damaged[greedy] = json.dumps({**records[greedy], "objective": "abc"})
+    damaged.insert(0, json.dumps({"key": ["x"]}))
+    log.write_text("\n".join(damaged) + "\n")
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    warnings = [line for line in err.splitlines() if line.startswith("warning: ")]
+    assert len(warnings) == 3 and all(f"{log}:" in w for w in warnings), err
+    assert f"{log}:1: 'key' is not a non-empty string" in err
+    assert "2 solves run" in err and "0 failed" in err
+    pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
+
+
+def test_a_killed_worker_is_retried_by_the_next_run(tmp_path, capsys, monkeypatch):
+    """A worker killed from outside under every attempt of a solve: that row is recorded failed
+    (cause infrastructure) and bench exits 1 saying so; the next run solves it again, with 0
+    failed and exit 0. A solver's own error stays failed until --retry-failed."""
+    kills = tmp_path / "kills"
+    kills.write_text(str(runner_pool_attempts()))
+    monkeypatch.setenv(runner_solvers.KILLS_FILE, str(kills))
+    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "t-killed", "--instances", "1",
+            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "1 failed, 0 refused (exit code 1" in err
+    row = pd.read_csv(tmp_path / "out" / "ratio-k.csv").set_index("solver").loc["t-killed"]
+    assert row["status"] == "failed" and "worker died (exit code -9)" in row["note"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "1 solves run" in err and "0 failed" in err
+    row = pd.read_csv(tmp_path / "out" / "ratio-k.csv").set_index("solver").loc["t-killed"]
+    assert row["status"] == "feasible"
+
+
+def runner_pool_attempts() -> int:
+    from gtsp_bench.pool import MAX_ATTEMPTS
+
+    return MAX_ATTEMPTS
+
+
+def test_solver_failures_stay_until_retry_failed_and_refusals_are_not_failures(tmp_path, capsys):
+    """A solver's own error is final (a rerun re-uses it, exit 1) until --retry-failed redoes
+    it; a refusal by design is counted as refused, and alone does not fail the run."""
+    base = ["bench", "-e", "ratio-k", "-K", "3", "--instances", "1", "--nodes", "4", "--jobs", "1",
+            *_dirs(tmp_path)]
+    assert main([*base, "--solvers", "t-refuses"]) == 0
+    err = capsys.readouterr().err
+    assert "0 failed, 1 refused" in err
+    assert main([*base, "--solvers", "t-crash"]) == 1
+    assert "1 solves run" in capsys.readouterr().err
+    assert main([*base, "--solvers", "t-crash"]) == 1
+    assert "0 solves run, 2 re-used, 1 failed" in capsys.readouterr().err
+    assert main([*base, "--solvers", "t-crash", "--retry-failed"]) == 1
+    assert "1 solves run, 1 re-used, 1 failed" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------- fuzzing the log reader
+# GTSP_BENCH_FUZZ_EXAMPLES=2000 make test runs many more examples than the default.
+FUZZ = settings(max_examples=int(os.environ.get("GTSP_BENCH_FUZZ_EXAMPLES", "40")), deadline=None,
+                database=None, suppress_health_check=list(HealthCheck))
+_json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-(10**20), 10**20) | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=10,
+)
+_FIELDS = ["key", "solver", "omega", "seed", "status", "objective", "order", "heads", "runtime_s",
+           "lower_bound", "note", "cause", "ground_J"]
+
+
+@st.composite
+def _log_line(draw) -> bytes:
+    """A log line: a real record with fields replaced or dropped, a random JSON value, or bytes."""
+    kind = draw(st.sampled_from(["mutated", "json", "bytes"]))
+    if kind == "bytes":
+        return draw(st.binary(max_size=40)).replace(b"\n", b"")
+    if kind == "json":
+        return json.dumps(draw(_json_values)).encode()
+    rec = _record("a")
+    for _ in range(draw(st.integers(1, 3))):
+        name = draw(st.sampled_from(_FIELDS))
+        if draw(st.booleans()):
+            rec.pop(name, None)
+        else:
+            rec[name] = draw(_json_values | st.sampled_from(["failed", "refused", "time_limit", "optimal"]))
+    return json.dumps(rec).encode()
+
+
+@FUZZ
+@given(lines=st.lists(_log_line(), max_size=6), torn=st.binary(max_size=10))
+def test_fuzz_the_log_reader_keeps_only_records_a_table_can_use(tmp_path_factory, lines, torn):
+    """Any lines at all (and a torn tail): the reader never raises; each line is kept or named
+    in a warning; every record it keeps makes a table row, as a solve or as the reference."""
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.parse import format_json_instance
+
+    path = tmp_path_factory.mktemp("log") / "runs.jsonl"
+    path.write_bytes(b"".join(line + b"\n" for line in lines) + torn.replace(b"\n", b""))
+    log = TaskLog(path)
+    key = _record("a")["key"]
+    records = log.load({key: (1, 3)})
+    assert len(records) + len(log.skipped) <= len(lines)
+    assert all(line.startswith(f"{path}:") for line in log.skipped)
+    inst = generate_instance(2, 3, seed=0)
+    stored = runner.StoredInstance(inst, format_json_instance(inst), "0123", path)
+    cell = runner.Cell(2, 0, 0.5)
+    for rec in records.values():
+        row = runner._row("ratio-k", cell, stored, "greedy", "dp", rec, rec, 10.0)
+        assert row["status"] in ("optimal", "feasible", "time_limit", "failed", "refused")
+        assert isinstance(row["objective"], float)

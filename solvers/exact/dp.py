@@ -122,6 +122,10 @@ class DynamicProgramming:
                         best, tour = cost, path
         except _TimeoutError:
             return self._fallback(problem)
+        except MemoryError:  # the table fits max_memory_gb but not this machine (or ulimit -v)
+            raise MemoryError(f"dp's {need / 2**30:.3g} GiB table for {instance.name} does not fit; "
+                              f"set -p max_memory_gb below {need / 2**30:.3g} to refuse it, or "
+                              f"use 'milp'") from None
         order, heads = problem.to_solution(tour)
         objective = problem.tour_cost(tour)
         return Solution(order, heads, objective=objective, status="optimal",

@@ -28,6 +28,9 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
 
+#: Share of the time limit ``aco+ls`` keeps for its local search: the colony stops earlier.
+LS_SHARE = 0.2
+
 
 def aco_search(
     problem: Problem,
@@ -150,8 +153,11 @@ class Aco:
         """Run the colony (then the local search for ``aco+ls``); stop early with status
         ``time_limit`` when the limit passes."""
         deadline = deadline_after(time_limit)
+        search_deadline = deadline
+        if self.local_search and deadline is not None:  # keep the local search its share
+            search_deadline = deadline - LS_SHARE * float(time_limit)  # type: ignore[arg-type]
         problem = price(instance, omega)
-        tour, cost, done, timed_out = self.search(problem, deadline=deadline, seed=seed)
+        tour, cost, done, timed_out = self.search(problem, deadline=search_deadline, seed=seed)
         stats = {"iterations": done}
         if self.local_search:
             return improved_solution(problem, tour, deadline, timed_out=timed_out, stats=stats)
@@ -162,6 +168,8 @@ class Aco:
 
 class AcoLS(Aco):
     """:class:`Aco`, then the shared local search
-    (:mod:`gtsp_bench.solvers.heuristics.local_search`) on its best tour, in the time left."""
+    (:mod:`gtsp_bench.solvers.heuristics.local_search`) on its best tour, in the time left: the
+    colony stops at ``1 - LS_SHARE`` of the time limit, so the local search always gets at least
+    ``LS_SHARE`` of it."""
 
     local_search = True
