@@ -517,7 +517,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
     config = make_suite_config(args.suite, quick=args.quick, out_dir=args.out, ks=args.clusters,
                                solvers=args.solvers, instances=args.instances, seed=args.seed,
                                time_limit=args.time_limit, **options)
-    return run_suite(config)
+    return run_suite(config, _answer)  # the table is the answer: the real stdout
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:
