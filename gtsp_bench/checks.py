@@ -49,6 +49,8 @@ def check_float(name: str, value: object, low: float, high: float, *, open_low: 
         v = float(value)  # type: ignore[arg-type]
         ok = math.isfinite(v) and (v > low if open_low else v >= low) and v <= high
     if not ok:
+        if math.isinf(high):
+            raise InputError(f"{name} must be a number {'>' if open_low else '>='} {low:g}, got {value!r}")
         bracket = "(" if open_low else "["
         raise InputError(f"{name} must be a number in {bracket}{low:g}, {high:g}], got {value!r}")
     return float(value)  # type: ignore[arg-type]
@@ -203,8 +205,6 @@ def _derived_params(params: Any) -> dict[str, float]:
 def tour_cost_bound(instance: Any) -> float:
     """An upper bound on the cost of any tour of ``instance`` (the weighted energy for any omega
     of a UAV instance, else the length), from each cluster's extremes: O(n)."""
-    from gtsp_bench.instance import pair_distances
-
     k = instance.n_clusters
     with np.errstate(over="ignore", invalid="ignore"):
         if instance.edge_weight_type == "EXPLICIT":
@@ -216,7 +216,9 @@ def tour_cost_bound(instance: Any) -> float:
         else:
             pts = instance.coords if instance.depot is None else np.vstack([instance.coords, instance.depot])
             lo, hi = pts.min(axis=0), pts.max(axis=0)
-            longest = float(pair_distances(lo, hi, instance.edge_weight_type)) + 1.0
+            # the box's diagonal bounds every Euclidean distance (ATT's pseudo-Euclidean is
+            # shorter), +1 for the TSPLIB rules' rounding up
+            longest = float(np.hypot(*(hi - lo))) + 1.0
         if instance.params is None:
             return (k + 1) * longest
         p = instance.params

@@ -14,6 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from gtsp_bench import checks
+from gtsp_bench.checks import check_int, check_memory
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.params import EnergyParams
@@ -34,9 +36,8 @@ BYTES_PER_NODE = 320
 def check_generator_memory(n_clusters: int, n_nodes: int) -> None:
     """Raise :class:`InputError` at once when K x N nodes would not fit in the memory this
     process can use (:func:`gtsp_bench.checks.memory_limit_bytes`), naming a size that would."""
-    from gtsp_bench.checks import check_memory, memory_limit_bytes
 
-    limit = memory_limit_bytes()
+    limit = checks.memory_limit_bytes()  # looked up here so that tests can patch it
     fit = max(int((limit or 0) // (BYTES_PER_NODE * n_clusters)), 1)
     check_memory(f"an instance of {n_clusters} clusters x {n_nodes} nodes", n_clusters * n_nodes
                  * BYTES_PER_NODE, f"use at most about {fit} nodes per cluster (--nodes)")
@@ -44,10 +45,8 @@ def check_generator_memory(n_clusters: int, n_nodes: int) -> None:
 
 def check_generator_args(n_clusters: int, n_nodes: int, zeta: float, area: float) -> None:
     """Raise :class:`InputError` at once when the settings cannot give instances."""
-    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)) or n_clusters < 1:
-        raise InputError(f"number of clusters must be an integer >= 1, got {n_clusters!r}")
-    if isinstance(n_nodes, bool) or not isinstance(n_nodes, (int, np.integer)) or n_nodes < 1:
-        raise InputError(f"number of nodes per cluster must be an integer >= 1, got {n_nodes!r}")
+    check_int("number of clusters", n_clusters, 1)
+    check_int("number of nodes per cluster", n_nodes, 1)
     if not np.isfinite(zeta) or zeta <= 0:
         raise InputError(f"zeta must be > 0, got {zeta!r}")
     if not np.isfinite(area):

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import is_int
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.params import EnergyParams
 
@@ -204,7 +205,7 @@ def _as_int_array(values: Sequence[int], what: str) -> np.ndarray:
     except TypeError:
         raise InfeasibleSolutionError(f"{what} must be a list of integers") from None
     for v in seq:
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        if not is_int(v):
             raise InfeasibleSolutionError(f"{what} must be a list of integers, got {v!r}")
     try:
         return np.asarray(seq, dtype=np.int64).reshape(-1)

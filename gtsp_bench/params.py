@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+from gtsp_bench.checks import is_number
 from gtsp_bench.errors import InputError
 
 #: Parameters that must be strictly positive; all others must be >= 0 except those in _ANY_SIGN.
@@ -97,7 +98,7 @@ class EnergyParams:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
+            if not is_number(value):
                 raise InputError(f"energy parameter {f.name!r} must be a number, got {value!r}")
             try:
                 finite = math.isfinite(value)

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from gtsp_bench.checks import MAX_TOUR_COST, check_finite_array, check_instance_numbers
+from gtsp_bench.checks import MAX_TOUR_COST, check_finite_array, check_instance_numbers, is_int, is_number
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.params import EnergyParams
@@ -56,7 +56,7 @@ def _point(value: Any, where: str) -> list[float]:
     if (
         not isinstance(value, list)
         or len(value) != 2
-        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        or not all(is_number(v) for v in value)
     ):
         raise InputError(f"{where} must be a pair of numbers [x, y], got {value!r}")
     try:
@@ -157,9 +157,7 @@ def parse_solution(text: str) -> tuple[list[int], list[int]]:
         if key not in data:
             raise InputError(f"missing key {key!r}")
         value = data[key]
-        if not isinstance(value, list) or not all(
-            isinstance(v, int) and not isinstance(v, bool) for v in value
-        ):
+        if not isinstance(value, list) or not all(is_int(v) for v in value):
             raise InputError(f"{key!r} must be a list of integers")
         out.append(value)
     return out[0], out[1]

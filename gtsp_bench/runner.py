@@ -212,7 +212,7 @@ def make_config(
     InputError
         A bad K, an unknown experiment, solver or reference, or a bad count or limit.
     """
-    from gtsp_bench.checks import check_seed, check_time_limit
+    from gtsp_bench.checks import check_int, check_seed, check_time_limit
     from gtsp_bench.registry import solver_names, solver_specs
 
     registered = solver_names()
@@ -234,9 +234,8 @@ def make_config(
     else:
         chosen = _split_names(solvers, "solver", registered)
     n_inst = n_instances if n_instances is not None else (QUICK_INSTANCES if quick else DEFAULT_INSTANCES)
-    for name, value in (("number of instances", n_inst), ("number of nodes", n_nodes)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise InputError(f"{name} must be an integer >= 1, got {value!r}")
+    n_inst = check_int("number of instances", n_inst, 1)
+    n_nodes = check_int("number of nodes", n_nodes, 1)
     check_seed(seed)
     for k in (min(k_tuple), max(k_tuple)):
         check_generator_args(k, n_nodes, DEFAULT_ZETA, 1000.0)
@@ -244,8 +243,7 @@ def make_config(
     if tl is None:
         raise InputError("the runner needs a per-solve time limit")
     n_jobs = (os.cpu_count() or 1) if jobs is None else jobs
-    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int) or n_jobs < 1:
-        raise InputError(f"jobs must be an integer >= 1, got {jobs!r}")
+    n_jobs = check_int("jobs", n_jobs, 1)
     if out_dir is None:
         out_dir = Path("results") / "quick" if quick else Path("results")
     return BenchConfig(

@@ -158,3 +158,21 @@ def test_check_log_record_accepts_a_real_record():
         check_log_record(rec, (1, 1, 1))
     with pytest.raises(InputError, match="is not NAME#HASH"):
         check_log_record({**rec, "key": "i|dp"})
+
+
+def test_no_hand_written_type_checks_outside_this_module():
+    """Input checks live in gtsp_bench.checks: no other module of the package or of solvers/
+    writes its own ``isinstance(x, bool)`` test (the sign of a hand-rolled number check)."""
+    import ast
+
+    from .conftest import REPO
+
+    found = []
+    for path in sorted([*(REPO / "gtsp_bench").rglob("*.py"), *(REPO / "solvers").rglob("*.py")]):
+        if path.name == "checks.py" and path.parent.name == "gtsp_bench":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance"
+                    and len(node.args) == 2 and ast.unparse(node.args[1]) == "bool"):
+                found.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert not found, f"use gtsp_bench.checks instead: {found}"

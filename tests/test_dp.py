@@ -60,5 +60,5 @@ def test_dp_time_limit_returns_a_feasible_tour():
 
 def test_bad_option():
     """max_memory_gb must be positive."""
-    with pytest.raises(InputError, match="max_memory_gb must be > 0"):
+    with pytest.raises(InputError, match="max_memory_gb must be a number > 0"):
         DynamicProgramming(max_memory_gb=0)

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from gtsp_bench.checks import check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
@@ -37,9 +38,7 @@ class Brute:
     """
 
     def __init__(self, max_tours: int = MAX_TOURS) -> None:
-        if isinstance(max_tours, bool) or not isinstance(max_tours, int) or max_tours < 1:
-            raise InputError(f"max_tours must be an integer >= 1, got {max_tours!r}")
-        self.max_tours = max_tours
+        self.max_tours = check_int("max_tours", max_tours, 1)
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,

@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from gtsp_bench.checks import check_float
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
@@ -88,11 +89,7 @@ class DynamicProgramming:
     """
 
     def __init__(self, max_memory_gb: float = 2.0) -> None:
-        if isinstance(max_memory_gb, bool) or not isinstance(max_memory_gb, (int, float)) or not (
-            max_memory_gb > 0
-        ):
-            raise InputError(f"max_memory_gb must be > 0, got {max_memory_gb!r}")
-        self.max_memory_gb = float(max_memory_gb)
+        self.max_memory_gb = check_float("max_memory_gb", max_memory_gb, 0.0, math.inf)
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
