@@ -106,6 +106,8 @@ def check_mapping(name: str, value: object) -> dict:
 
 
 _K_FORMS = "a range 4..10, a list 4,7,10 or a mix 4..7,10"
+#: Largest cluster count a K set may name (GTSPLIB's largest instance has 17,180 clusters).
+MAX_K = 100_000
 
 
 def parse_ks(text: object) -> tuple[int, ...]:
@@ -116,7 +118,8 @@ def parse_ks(text: object) -> tuple[int, ...]:
     Raises
     ------
     InputError
-        One line naming the bad part: not a number or range, a reversed range, or K < 1.
+        One line naming the bad part: not a number or range, a reversed range, K < 1 or
+        K > :data:`MAX_K`.
     """
     out: set[int] = set()
     for part in str(text).replace(" ", "").split(","):
@@ -131,6 +134,8 @@ def parse_ks(text: object) -> tuple[int, ...]:
             raise InputError(f"bad K {text!r}: cluster counts must be >= 1, got {a}")
         if b < a:
             raise InputError(f"bad K {text!r}: range {part} is reversed (write {b}..{a})")
+        if b > MAX_K:
+            raise InputError(f"bad K {text!r}: cluster counts above {MAX_K} are not benchmarked")
         out.update(range(a, b + 1))
     return tuple(sorted(out))
 

@@ -226,7 +226,7 @@ def make_config(
     elif isinstance(ks, str):
         k_tuple = parse_ks(ks)
     else:
-        k_tuple = parse_ks(",".join(str(int(k)) for k in ks))
+        k_tuple = parse_ks(",".join(str(check_int("K", k, 1)) for k in ks))
     if solvers is None:
         chosen = tuple(s.name for s in solver_specs() if s.bench)
         if not chosen:
@@ -748,5 +748,5 @@ def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
 
 __all__ = [
     "CSV_COLUMNS", "EXPERIMENTS", "BenchConfig", "Cell", "RunSummary", "TaskLog",
-    "experiment_cells", "make_config", "parse_ks", "plan", "resolve_references", "run_bench",
+    "experiment_cells", "make_config", "plan", "resolve_references", "run_bench",
 ]

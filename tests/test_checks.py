@@ -70,6 +70,7 @@ def test_parse_ks_ranges_lists_and_mixes():
     assert parse_ks("4..7,10") == (4, 5, 6, 7, 10)
     assert parse_ks(" 10, 4..5 ,5") == (4, 5, 10)
     assert parse_ks("7") == (7,) and parse_ks("3..3") == (3,)
+    assert parse_ks("7, 4,5..6,4") == (4, 5, 6, 7)
 
 
 @pytest.mark.parametrize("text, message", [
@@ -82,6 +83,7 @@ def test_parse_ks_ranges_lists_and_mixes():
     ("", "empty entry"),
     ("0", "cluster counts must be >= 1, got 0"),
     ("-2..3", "cluster counts must be >= 1, got -2"),
+    ("4..10000000000", "cluster counts above 100000 are not benchmarked"),
 ])
 def test_parse_ks_bad_input(text, message):
     """Bad text: one line naming the K set and the bad part, with the accepted forms."""

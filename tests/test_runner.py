@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from gtsp_bench import runner
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-from gtsp_bench.runner import CSV_COLUMNS, TaskLog, make_config, parse_ks, resolve_references, run_bench
+from gtsp_bench.runner import CSV_COLUMNS, TaskLog, make_config, resolve_references, run_bench
 
 from . import runner_solvers
 from .conftest import REPO
@@ -46,16 +46,6 @@ def _config(tmp_path: Path, **kw):
 
 def _log_lines(config) -> list[str]:
     return config.log_path.read_text().splitlines() if config.log_path.exists() else []
-
-
-def test_parse_ks_forms_and_errors():
-    """Ranges, lists and mixes parse; reversed ranges, words and zero are refused."""
-    assert parse_ks("4..10") == tuple(range(4, 11))
-    assert parse_ks("4,7") == (4, 7)
-    assert parse_ks("7, 4,5..6,4") == (4, 5, 6, 7)
-    for bad in ("10..4", "four", "4..", "0", "", "4;7"):
-        with pytest.raises(InputError, match="bad K"):
-            parse_ks(bad)
 
 
 def test_reference_resolution():
