@@ -97,9 +97,26 @@ def test_docs_tables_are_generated_from_the_committed_results():
     assert found >= 1
 
 
+#: The folder beside the checkout that development machines have and users do not (spelt in
+#: parts so that this file does not name it).
+OUTSIDE = "/".join(("..", "shared"))
+
+
+def test_nothing_refers_to_the_folder_beside_the_checkout():
+    """No code, test, doc, build or data-description file names a path outside the repository."""
+    roots = ("gtsp_bench", "solvers", "tests", "docs", "examples", "benchmarks", ".ci", "instances")
+    files = [REPO / name for name in ("README.md", "Makefile", "pyproject.toml", "mkdocs.yml")]
+    files += [p for root in roots for p in (REPO / root).rglob("*")
+              if p.suffix in {".py", ".md", ".toml", ".yml", ".txt", ""} and p.is_file()]
+    assert len(files) > 50
+    bad = [str(p.relative_to(REPO)) for p in files
+           if OUTSIDE in p.read_text(encoding="utf-8", errors="replace")]
+    assert not bad, bad
+
+
 def test_no_issue_numbers_or_outside_paths():
     """The README and the docs never refer to issue numbers or to files outside the repository."""
     for page in PAGES:
         text = page.read_text(encoding="utf-8")
-        assert "../shared" not in text, page
+        assert OUTSIDE not in text, page
         assert not re.search(r"\bissues? #?\d+|(?<![\w(/])#\d+\b", text, flags=re.I), page

@@ -1,4 +1,4 @@
-"""Issue 4's bad-input and time-limit contract, for every heuristic through the CLI."""
+"""The bad-input and time-limit contract of every heuristic, through the CLI."""
 
 from __future__ import annotations
 
