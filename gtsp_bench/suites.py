@@ -49,6 +49,7 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.tables import (
     Row,
     best_known,
+    count_failed,
     gap_time_cell,
     grid_header,
     grid_line,
@@ -361,7 +362,7 @@ EXACT_COLUMNS = ("group", "instance", "omega", "solver", "status", "objective", 
 
 
 def run_exact(c: SuiteConfig, out: TextIO) -> int:
-    """The exact suite; exit code 1 when two proven optima disagree."""
+    """The exact suite; exit code 1 when two proven optima disagree or a solve failed."""
     rows, lib, info = _exact_rows(c)
     assert c.time_limit is not None
     print(f"{c.instances} instances per K (set seed {c.set_seed}, N = 20), time limit "
@@ -376,7 +377,7 @@ def run_exact(c: SuiteConfig, out: TextIO) -> int:
     write_csv(c.csv_path, EXACT_COLUMNS, (
         [r.group, r.instance, "" if r.omega is None else r.omega, r.solver, r.status, repr(r.objective),
          repr(r.lower_bound), f"{r.runtime_s:.4f}", r.note] for r in [*rows, *lib]))
-    return 1 if bad else 0
+    return 1 if bad or count_failed([*rows, *lib]) else 0
 
 
 # ---------------------------------------------------------------------- heuristics
@@ -399,15 +400,18 @@ def exact_optimum(instance: Instance, omega: float, exact: Sequence[tuple[str, i
     return None
 
 
+_NO_ANSWER = ("failed", "refused")
+
+
 def _solved(c: SuiteConfig, group: str, instance: Instance, omega: float | None) -> list[Row]:
-    """Every solver on one instance; failures are reported on stderr and left out."""
+    """Every solver on one instance; a failure or refusal is said on stderr (and kept as a row
+    for the CSV; the tables leave it out)."""
     rows = []
     for s in c.solvers:
         r = solve(group, instance, omega, s, c.time_limit, c.solver_seed)
-        if r.status == "failed":
-            _say(f"  {s} failed on {instance.name}: {r.note}")
-        else:
-            rows.append(r)
+        if r.status in _NO_ANSWER:
+            _say(f"  {s} {r.status} on {instance.name}: {r.note}")
+        rows.append(r)
     return rows
 
 
@@ -422,7 +426,8 @@ def _heuristics_rows(c: SuiteConfig) -> list[Row]:
             if opt is not None:
                 ref, kind = opt[0], f"optimum ({opt[1]})"
             else:
-                ref, kind = min((r.objective for r in found), default=math.nan), "best found"
+                answered = (r.objective for r in found if r.status not in _NO_ANSWER)
+                ref, kind = min(answered, default=math.nan), "best found"
             out += [r.against(ref, kind) for r in found]
             _say(f"  {inst.name}: reference {ref:.4f} ({kind})")
     for inst, row in _gtsplib_samples(c):
@@ -433,7 +438,9 @@ def _heuristics_rows(c: SuiteConfig) -> list[Row]:
 
 
 def heuristics_table(rows: Sequence[Row], solvers: Sequence[str]) -> str:
-    """Mean gap and median time per group (and per GTSPLIB sample) and solver."""
+    """Mean gap and median time per group (and per GTSPLIB sample) and solver; solves without an
+    answer (failed, refused) are left out."""
+    rows = [r for r in rows if r.status not in _NO_ANSWER]
     lines = grid_header(f"{'set':<14} {'n':>3}  {'reference':<22}", solvers, 14)
     groups: dict[str, list[Row]] = {}
     for r in rows:
@@ -458,7 +465,7 @@ HEURISTICS_COLUMNS = ("group", "instance", "solver", "objective", "gap_percent",
 
 
 def run_heuristics(c: SuiteConfig, out: TextIO) -> int:
-    """The heuristics suite."""
+    """The heuristics suite; exit code 1 when a solve failed."""
     rows = _heuristics_rows(c)
     assert c.time_limit is not None
     print(f"omega {c.omegas[0]:g} (generated sets), seed {c.solver_seed}, time limit {c.time_limit:g} s "
@@ -467,7 +474,7 @@ def run_heuristics(c: SuiteConfig, out: TextIO) -> int:
     write_csv(c.csv_path, HEURISTICS_COLUMNS, (
         [r.group, r.instance, r.solver, repr(r.objective), f"{r.gap:.6f}" if math.isfinite(r.gap) else "",
          f"{r.runtime_s:.4f}", r.status, repr(r.reference), r.reference_kind] for r in rows))
-    return 0
+    return 1 if count_failed(rows) else 0
 
 
 # ---------------------------------------------------------------------- learned

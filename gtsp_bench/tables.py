@@ -60,17 +60,31 @@ class Row:
 
 def solve(group: str, instance: Instance, omega: float | None, solver: str, time_limit: float | None,
           seed: int) -> Row:
-    """One solve of the registered ``solver`` (a fresh object) through the checked harness; a
-    refusal or failure becomes a ``failed`` row whose note is the error's first line."""
+    """One solve of the registered ``solver`` (a fresh object) through the checked harness.
+
+    A refusal by design (an :class:`InputError`: an unknown or unavailable solver, an instance the
+    solver does not take) becomes a ``refused`` row, a solver's failure (a :class:`SolverError`) a
+    ``failed`` row, and so does any other exception the solver raises; each has the error's first
+    line as its note."""
     from gtsp_bench.registry import get_solver, run_solver
 
     try:
         r = run_solver(get_solver(solver), instance, omega, time_limit=time_limit, seed=seed)
-    except (InputError, SolverError) as e:
-        return Row(group, instance.name, omega, solver, "failed", math.nan,
-                   note=str(e).splitlines()[0][:200] if str(e) else type(e).__name__)
+    except Exception as e:
+        status = "refused" if isinstance(e, InputError) else "failed"
+        text = str(e) if isinstance(e, (InputError, SolverError)) else f"{type(e).__name__}: {e}"
+        return Row(group, instance.name, omega, solver, status, math.nan,
+                   note=(text.splitlines() or [type(e).__name__])[0][:200])
     lower = math.nan if r.lower_bound is None else r.lower_bound
     return Row(group, instance.name, omega, solver, r.status, r.objective, lower, r.runtime_s)
+
+
+def count_failed(rows: Sequence[Row]) -> int:
+    """How many rows are ``failed`` (a refusal by design is not a failure), said on stderr."""
+    failed = sum(r.status == "failed" for r in rows)
+    if failed:
+        print(f"{failed} solve(s) failed: see the status and note columns of the CSV", file=sys.stderr)
+    return failed
 
 
 def best_known(folder: Path, keep: Callable[[dict[str, str]], bool]) -> list[dict[str, str]]:

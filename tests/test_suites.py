@@ -186,6 +186,22 @@ def test_heuristics_fallback_to_best_found(tmp_path, capsys):
         assert min(float(r["gap_percent"]) for r in rows if r["instance"] == inst) == 0.0
 
 
+def test_a_failed_solve_is_a_row_and_exit_code_1(tmp_path, capsys):
+    """A solver that raises gives failed rows in the CSV (kept out of the table), a line on
+    stderr and exit code 1; the other solver's rows are unaffected."""
+    from gtsp_bench.registry import register_solver
+
+    from .runner_solvers import Crash
+
+    register_solver("suite-crash", Crash, "raises")
+    assert main([*HEURISTICS_SMALL, "--solvers", "greedy,suite-crash", "--out", str(tmp_path)]) == 1
+    out, err = capsys.readouterr()
+    assert "2 solve(s) failed" in err and "RuntimeError: boom" not in out
+    rows = _rows(tmp_path / "heuristics.csv")
+    assert {r["status"] for r in rows if r["solver"] == "suite-crash"} == {"failed"}
+    assert all(r["status"] != "failed" for r in rows if r["solver"] == "greedy")
+
+
 # ---------------------------------------------------------------------- learned
 def test_learned_table_and_csv_against_cached_optima(tmp_path, capsys):
     """Three K = 4 instances: a bound row and one row per solver and omega, gaps >= 0, the paper

@@ -9,9 +9,11 @@ import pytest
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import instance_set
+from gtsp_bench.registry import Solution, register_solver
 from gtsp_bench.tables import (
     Row,
     best_known,
+    count_failed,
     gap_time_cell,
     grid_header,
     grid_line,
@@ -33,16 +35,34 @@ def test_row_gap_and_reference():
     assert math.isnan(Row("K=4", "a", 0.5, "greedy", "feasible", 1.0).gap)
 
 
+class _Infeasible:
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        return Solution((0,), (0,), 0.0)
+
+
+class _Crash:
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        raise RuntimeError("boom")
+
+
 def test_solve_records_result_and_failure():
     """A solve through the harness keeps status, objective, bound and time; an unknown solver
-    becomes a failed row with the error's first line as its note."""
+    becomes a refused row, a solver that raises a failed one, each with the error's first line
+    as its note; count_failed counts only the failures."""
     inst = instance_set(1, 3, 0, n_nodes=3)[0]
     ok = solve("K=3", inst, 0.5, "dp", 10.0, 0)
     assert ok.status == "optimal" and ok.objective > 0 and ok.runtime_s >= 0
     assert ok.lower_bound == pytest.approx(ok.objective)
     bad = solve("K=3", inst, 0.5, "no-such-solver", 10.0, 0)
-    assert bad.status == "failed" and math.isnan(bad.objective) and "no-such-solver" in bad.note
+    assert bad.status == "refused" and math.isnan(bad.objective) and "no-such-solver" in bad.note
     assert "\n" not in bad.note
+    register_solver("tables-infeasible", _Infeasible, "visits one cluster")
+    register_solver("tables-crash", _Crash, "raises")
+    wrong = solve("K=3", inst, 0.5, "tables-infeasible", 10.0, 0)
+    assert wrong.status == "failed" and "returned an infeasible solution" in wrong.note
+    crash = solve("K=3", inst, 0.5, "tables-crash", 10.0, 0)
+    assert crash.status == "failed" and crash.note == "RuntimeError: boom"
+    assert count_failed([ok, bad, wrong, crash]) == 2
 
 
 def test_time_to_proof_cell():
