@@ -368,14 +368,22 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
+    from gtsp_bench.checks import check_omega, check_time_limit
     from gtsp_bench.io import atomic_write_text, read_instance
     from gtsp_bench.registry import get_solver, run_solver
 
     instance = read_instance(args.file)
     options = dict(args.param)
     solver = get_solver(args.solver, **options)
-    result = run_solver(solver, instance, args.omega, time_limit=args.time_limit,
-                        seed=args.seed, name=args.solver)
+    if instance.is_uav:
+        check_omega(args.omega)  # argument errors first: they are not the file's
+    check_time_limit(args.time_limit)
+    try:
+        result = run_solver(solver, instance, args.omega, time_limit=args.time_limit,
+                            seed=args.seed, name=args.solver)
+    except InputError as e:  # the solver refuses this instance: say which file
+        where = str(args.file)
+        raise InputError(str(e) if str(e).startswith(where) else f"{where}: {e}") from None
     text = json.dumps(result.to_dict())
     if args.output:
         atomic_write_text(args.output, text + "\n")

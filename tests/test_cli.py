@@ -164,6 +164,16 @@ def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     assert "Traceback" not in err
 
 
+def test_a_solver_refusing_the_instance_names_the_file(capsys, tmp_path):
+    """dp refusing a K = 25 instance (its table would not fit its memory limit): one line that
+    starts with the file, exit code 2, nothing on stdout."""
+    path = tmp_path / "k25.json"
+    assert run(capsys, "generate", "--clusters", "25", "--seed", "1", "-o", str(path))[0] == 0
+    code, out, err = run(capsys, "solve", str(path), "--solver", "dp", "--json")
+    assert code == 2 and out == ""
+    assert err.startswith(f"gtsp-bench: error: {path}: dp needs ") and err.count("\n") == 1
+
+
 def test_failed_generate_writes_nothing(capsys, tmp_path):
     """An impossible generate leaves no file behind."""
     target = tmp_path / "g.json"
