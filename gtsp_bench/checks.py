@@ -200,7 +200,7 @@ def _derived_params(params: Any) -> dict[str, float]:
             value = float(getattr(params, name))
         except (OverflowError, ZeroDivisionError, ValueError):
             value = math.inf
-        if not math.isfinite(value) or (name in ("r_data", "v_uav") and value <= 0):
+        if not math.isfinite(value) or (name == "r_data" and value <= 0):
             raise InputError(f"energy parameters give {name} = {_fmt(value)}: the energy model "
                              f"needs finite, positive derived values")
         out[name] = value
