@@ -21,10 +21,12 @@ from hypothesis import strategies as st
 from gtsp_bench import runner
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-from gtsp_bench.runner import CSV_COLUMNS, TaskLog, make_config, resolve_references, run_bench
+from gtsp_bench.runner import CSV_COLUMNS, make_config, resolve_references, run_bench
+from gtsp_bench.tasklog import TaskLog
 
 from . import runner_solvers
 from .conftest import REPO
+from .test_tasklog import record as _record
 
 matplotlib.use("Agg")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -274,90 +276,6 @@ def test_instance_sets_are_reused_and_checked(tmp_path, capsys):
     path.write_text(json.dumps(data))
     with pytest.raises(InputError, match="generator settings"):
         runner.load_instance_set(config, 3, 2)
-
-
-def _record(name: str, objective: float = 10.0, **kw) -> dict:
-    """A well-formed task-log record of a greedy solve on a 2-cluster instance ``name``."""
-    return {"key": f"{name}#0123|greedy|w=0.5|seed=0|tl=10", "instance": name, "solver": "greedy",
-            "omega": 0.5, "seed": 0, "time_limit": 10.0, "status": "feasible",
-            "objective": objective, "order": [1, 0], "heads": [0, 2], "note": "", **kw}
-
-
-def test_task_log_drops_torn_line(tmp_path):
-    """A torn last line is cut off; later appends start on a fresh line; the last record wins."""
-    log = TaskLog(tmp_path / "runs.jsonl")
-    a, b = _record("a"), _record("b")
-    log.append(a)
-    log.append(b)
-    log.close()
-    with open(log.path, "a") as f:
-        f.write('{"key": "c", "v"')
-    assert set(log.load()) == {a["key"], b["key"]}
-    log.append({**a, "objective": 9.0})
-    log.close()
-    records = log.load()
-    assert records[a["key"]]["objective"] == 9.0 and len(log.path.read_text().splitlines()) == 3
-    assert log.skipped == []
-
-
-@pytest.mark.parametrize("bad, reason", [
-    ({"key": ["x"]}, "'key' is not a non-empty string"),
-    ({**_record("a"), "objective": "abc"}, "objective 'abc' of a feasible solve is not a finite"),
-    ({"key": _record("a")["key"]}, "solver None does not match the key"),
-    ({**_record("a"), "objective": float("inf")}, "not a finite number"),
-    ({**_record("a"), "status": "done"}, "status 'done' is not one of"),
-    ({**_record("a"), "solver": "dp"}, "solver 'dp' does not match the key"),
-    ({**_record("a"), "omega": 0.3}, "omega 0.3 does not match the key"),
-    ({**_record("a"), "order": [0, 0]}, "order is not a permutation"),
-    ({**_record("a"), "order": [0, 1, 2], "heads": [0, 0, 0]}, "order has 3 entries, not 2"),
-    ({**_record("a"), "heads": [0]}, "heads has 1 entries, not 2"),
-    ({**_record("a"), "heads": [0, 3]}, "heads names a node outside its cluster"),
-    ({**_record("a"), "order": [True, 0]}, "order is not a list of integers"),
-    ({**_record("a"), "status": "failed"}, "objective 10.0 of a failed solve is not null"),
-    ({**_record("a"), "status": "failed", "objective": None}, "without an objective has a tour"),
-    ({**_record("a"), "runtime_s": "fast"}, "runtime_s 'fast' is not a number"),
-    ({**_record("a"), "status": "failed", "objective": None, "order": [], "heads": [],
-      "cause": "cosmic rays"}, "cause 'cosmic rays' is not one of"),
-    ([1, 2], "not a JSON object"),
-])
-def test_task_log_skips_bad_records_with_a_warning(tmp_path, bad, reason):
-    """A record of the wrong shape (the key a list, a text objective, a bare key, a tour of the
-    wrong length, ...) is skipped and named by line; the good record before it stays."""
-    log = TaskLog(tmp_path / "runs.jsonl")
-    good = _record("a")
-    log.append(good)
-    log.close()
-    with open(log.path, "a") as f:
-        f.write(json.dumps(bad) + "\n")
-    records = log.load({good["key"]: (1, 3)})
-    assert records == {good["key"]: good}
-    assert len(log.skipped) == 1 and log.skipped[0].startswith(f"{log.path}:2: ")
-    assert reason in log.skipped[0]
-
-
-def test_task_log_accepts_failures_old_and_new(tmp_path):
-    """Failures with a null objective, older ones with NaN, refusals, and a time_limit row killed
-    without an answer all load; an old 'worker died' note counts as the infrastructure's fault."""
-    log = TaskLog(tmp_path / "runs.jsonl")
-    base = {k: v for k, v in _record("a").items() if k not in ("order", "heads", "objective")}
-    rows = [
-        {**base, "key": base["key"] + "1", "status": "failed", "objective": None, "cause": "solver"},
-        {**base, "key": base["key"] + "2", "status": "failed", "objective": float("nan"),
-         "note": "worker died (exit code -9)"},
-        {**base, "key": base["key"] + "3", "status": "refused", "objective": None},
-        {**base, "key": base["key"] + "4", "status": "time_limit", "objective": None},
-    ]
-    for row in rows:
-        log.append(row)
-    log.close()
-    records = log.load()
-    assert len(records) == 4 and log.skipped == []
-    causes = [runner.failure_cause(records[r["key"]]) for r in rows]
-    assert causes == ["solver", "infrastructure", None, None]
-    config = _config(tmp_path, ks="3")
-    assert [runner.needs_run(records[r["key"]], config) for r in rows] == [False, True, False, False]
-    retry = _config(tmp_path, ks="3", retry_failed=True)
-    assert [runner.needs_run(records[r["key"]], retry) for r in rows] == [True, True, False, False]
 
 
 def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
