@@ -111,7 +111,7 @@ def test_bad_options_rejected(options):
 def test_costs_that_would_overflow_the_integer_sums_are_refused(monkeypatch):
     """Costs whose integer scaling would overflow PyVRP's int64 sums, that cannot be scaled (a
     subnormal largest cost) or that are not finite give one InputError line, never a wrong tour."""
-    from gtsp_bench.solvers.peers import pyvrp as peer
+    from gtsp_bench.solvers.peers import scaling as peer
 
     problem = price(generate_instance(3, 2, seed=0), 0.5)
     assert folded_costs(problem)[0].max() > 0

@@ -18,23 +18,16 @@ PyVRP is an optional extra (``make install`` installs it); without it this solve
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
+from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
 from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
-
-#: Integer scale target: the largest folded edge cost becomes about this many units.
-RESOLUTION = 1e7
-#: Largest cost that is used as is when all folded costs are whole numbers.
-MAX_EXACT = 2**40
-#: Largest scaled cost of a whole tour: PyVRP adds int64 costs, so this leaves room for its sums.
-MAX_TOUR_UNITS = 2**60
 
 
 def _import_pyvrp():
@@ -47,29 +40,6 @@ def _import_pyvrp():
             "'make install' or pip install 'gtsp-bench[pyvrp]'"
         ) from None
     return pyvrp
-
-
-def folded_costs(problem: Problem, resolution: float = RESOLUTION) -> tuple[np.ndarray, float]:
-    """Integer edge costs with the node costs folded in, and the scale used.
-
-    ``out[i, j] = round(scale * (edge(i, j) + (node(i) + node(j)) / 2))`` off the diagonal, 0 on it.
-    """
-    with np.errstate(over="ignore", invalid="ignore"):
-        cost = problem.edge_cost + 0.5 * (problem.node_cost[:, None] + problem.node_cost[None, :])
-    np.fill_diagonal(cost, 0.0)
-    if not np.all(np.isfinite(cost)):
-        raise InputError(f"pyvrp: {problem.instance.name} has costs that are not finite numbers; "
-                         f"they cannot be scaled to integers")
-    top = float(np.abs(cost).max()) if cost.size else 0.0
-    if np.all(cost == np.round(cost)) and top <= MAX_EXACT:
-        scale = 1.0
-    else:
-        scale = resolution / top if top > 0 else 1.0
-    # A tour sums K + 1 edges: its scaled cost must stay far inside int64, or PyVRP's sums wrap.
-    if not math.isfinite(scale) or not (problem.n_clusters + 1) * top * scale <= MAX_TOUR_UNITS:
-        raise InputError(f"pyvrp: the costs of {problem.instance.name} (up to {top:.6g}) scaled to "
-                         f"integers would overflow PyVRP's 64-bit sums; use another solver")
-    return np.round(cost * scale).astype(np.int64), scale
 
 
 class PyVRPPeer:
