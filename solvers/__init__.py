@@ -57,4 +57,7 @@ BUILTIN: tuple[Builtin, ...] = (
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),
+    Builtin("ortools", f"{_P}.ortools:OrToolsPeer",
+            "OR-Tools routing as a peer: one vehicle, a mandatory disjunction per cluster, GLS",
+            bench=False),
 )

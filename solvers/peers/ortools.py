@@ -1,0 +1,188 @@
+"""OR-Tools' vehicle routing solver (first solution + local search metaheuristic) as an outside peer.
+
+The GTSP becomes a one-vehicle routing problem: every node is a visit, the nodes of each cluster
+form one **mandatory disjunction** of cardinality 1 (OR-Tools' way to say *exactly one of these*:
+a disjunction without a penalty must be served, so no penalty has to be chosen large enough and
+no penalty can overflow). Node costs are folded into the arc costs, half of each end's node cost on
+every arc, and scaled to integers as for the pyvrp peer (:mod:`.scaling`: whole-number costs as
+they are, else the largest about ``resolution`` units; costs whose tours could overflow int64 sums
+or could not be told apart are refused with one :class:`InputError` line). The matrix is handed
+over with ``RegisterTransitMatrix``, so the search never calls back into Python. The tour found is
+mapped back and priced exactly (:meth:`~gtsp_bench.problem.Problem.tour_cost`).
+
+OR-Tools needs a depot. A UAV instance has one. A ``.gtsp`` file has none: as in the pyvrp peer, a
+node of its smallest cluster is made the depot and the other clusters become disjunctions; when that
+cluster has several nodes OR-Tools runs once per node (the time limit shared among the runs) and the
+best tour is kept. (GTSPLIB files all have a one-node cluster: a single run.)
+
+The search (``first_solution``, then ``metaheuristic``) runs until the time limit, unless
+``solution_limit`` stops it first or a metaheuristic without escape (``GREEDY_DESCENT``) reaches a
+local optimum. Guided local search never stops on its own: it runs to the limit and reports status
+``time_limit``, as the other time-limited solvers do.
+
+Seeding: ``seed`` reseeds OR-Tools' constraint solver (``Solver.ReSeed``), the random source of its
+randomised operators. OR-Tools' default routing operators and guided local search are
+deterministic, so in practice the seed does not change a run; and a run stopped by its time limit
+depends on the machine's speed whatever the seed. A run stopped by ``solution_limit`` is
+reproducible.
+
+OR-Tools is imported only when a solve starts (never by the registry or a listing); this module
+does not import highspy.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
+
+from gtsp_bench.checks import (
+    check_choice,
+    check_float,
+    check_int,
+    check_seed,
+    check_time_limit,
+    default_time_limit,
+)
+from gtsp_bench.errors import InputError, SolverError
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
+from gtsp_bench.registry import Solution
+
+#: First solution strategies (names of OR-Tools' ``FirstSolutionStrategy``) that build a tour of
+#: this model; ``EVALUATOR_STRATEGY`` (needs a callback), ``SWEEP`` (needs coordinates),
+#: ``BEST_INSERTION`` (finds no tour here) and ``ALL_UNPERFORMED`` (leaves the mandatory clusters
+#: out) are not offered.
+FIRST_SOLUTIONS = (
+    "AUTOMATIC", "PATH_CHEAPEST_ARC", "PATH_MOST_CONSTRAINED_ARC", "SAVINGS", "PARALLEL_SAVINGS",
+    "CHRISTOFIDES", "PARALLEL_CHEAPEST_INSERTION", "SEQUENTIAL_CHEAPEST_INSERTION",
+    "LOCAL_CHEAPEST_INSERTION", "LOCAL_CHEAPEST_COST_INSERTION", "GLOBAL_CHEAPEST_ARC",
+    "LOCAL_CHEAPEST_ARC", "FIRST_UNBOUND_MIN_VALUE",
+)
+#: Local search metaheuristics (names of OR-Tools' ``LocalSearchMetaheuristic``).
+METAHEURISTICS = (
+    "GUIDED_LOCAL_SEARCH", "GREEDY_DESCENT", "SIMULATED_ANNEALING", "TABU_SEARCH",
+    "GENERIC_TABU_SEARCH", "AUTOMATIC",
+)
+#: OR-Tools' search statuses that say the time limit stopped the search (a metaheuristic stopped by
+#: it reports ``ROUTING_SUCCESS``: the run's duration tells that case).
+_TIMED_OUT = ("ROUTING_PARTIAL_SUCCESS_LOCAL_OPTIMUM_NOT_REACHED", "ROUTING_FAIL_TIMEOUT")
+#: Shortest run handed to OR-Tools (seconds): a run owes a tour even when the budget is spent.
+_MIN_RUN = 1e-3
+
+
+def _import_ortools():
+    try:
+        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+    except ImportError as e:  # a required dependency: only a broken install gets here
+        raise InputError(f"solver 'ortools' needs the package ortools ({e}); "
+                         "install it with pip install ortools") from None
+    return pywrapcp, routing_enums_pb2
+
+
+class OrToolsPeer:
+    """OR-Tools routing on the GTSP with one mandatory disjunction per cluster (see the module
+    docstring).
+
+    Parameters
+    ----------
+    first_solution
+        OR-Tools first solution strategy, one of :data:`FIRST_SOLUTIONS`.
+    metaheuristic
+        OR-Tools local search metaheuristic, one of :data:`METAHEURISTICS`.
+    resolution
+        The largest folded arc cost becomes about this many integer units (> 0), unless the costs
+        are already whole numbers.
+    solution_limit
+        Stop each run after this many solutions (>= 1; ``None``: only the time limit stops
+        guided local search). A run stopped this way is reproducible.
+    """
+
+    def __init__(
+        self, first_solution: str = "PATH_CHEAPEST_ARC", metaheuristic: str = "GUIDED_LOCAL_SEARCH",
+        resolution: float = RESOLUTION, solution_limit: int | None = None,
+    ) -> None:
+        self.first_solution = check_choice("first_solution", first_solution, FIRST_SOLUTIONS)
+        self.metaheuristic = check_choice("metaheuristic", metaheuristic, METAHEURISTICS)
+        self.resolution = check_float("resolution", resolution, 0.0, float(MAX_EXACT))
+        self.solution_limit = (None if solution_limit is None
+                               else check_int("solution_limit", solution_limit, 1))
+
+    def solve(
+        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
+        seed: int = 0,
+    ) -> Solution:
+        """Run OR-Tools (once per node of the smallest cluster when there is no depot)."""
+        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        seed = check_seed(seed)
+        start = time.perf_counter()
+        problem = price(instance, omega)
+        cost, scale = folded_costs(problem, self.resolution, solver="ortools", library="OR-Tools")
+        pywrapcp, enums = _import_ortools()
+        if problem.depot is not None:
+            depots = [problem.depot]
+        else:
+            depots = [int(v) for v in min(problem.clusters, key=len)]
+        best, best_cost, timed_out, solutions = None, np.inf, False, 0
+        for n_done, depot in enumerate(depots):
+            budget = (time_limit - (time.perf_counter() - start)) / (len(depots) - n_done)
+            if budget <= 0:
+                timed_out = True
+                break
+            tour, found, hit = self._run(pywrapcp, enums, problem, cost, depot, budget, seed)
+            solutions += found
+            timed_out |= hit
+            c = problem.tour_cost(tour)
+            if c < best_cost:
+                best, best_cost = tour, c
+        if best is None:  # not even one run fitted: a tour is still owed
+            best = self._run(pywrapcp, enums, problem, cost, depots[0], _MIN_RUN, seed)[0]
+            best_cost = problem.tour_cost(best)
+        order, heads = problem.to_solution(best)
+        return Solution(order, heads, objective=best_cost,
+                        status="time_limit" if timed_out else "feasible",
+                        stats={"solutions": solutions, "scale": scale, "runs": len(depots)})
+
+    def _run(
+        self, pywrapcp, enums, problem: Problem, cost: np.ndarray, depot: int, seconds: float,
+        seed: int,
+    ) -> tuple[np.ndarray, int, bool]:
+        """One OR-Tools run with ``depot`` as the depot: (tour, solutions, stopped by time)."""
+        depot_cluster = int(problem.cluster_of[depot])
+        others = [c for c in range(problem.n_clusters) if c != depot_cluster]
+        if not others:  # a single cluster and no depot: the tour is the node itself
+            return np.array([depot]), 0, False
+        nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
+        manager = pywrapcp.RoutingIndexManager(len(nodes), 1, 0)
+        routing = pywrapcp.RoutingModel(manager)
+        routing.solver().ReSeed(seed)
+        arcs = routing.RegisterTransitMatrix(cost[np.ix_(nodes, nodes)].tolist())
+        routing.SetArcCostEvaluatorOfAllVehicles(arcs)
+        first = 1
+        for c in others:  # local ids 1.. in the order of `nodes`; no penalty: mandatory, exactly 1
+            size = len(problem.clusters[c])
+            routing.AddDisjunction([manager.NodeToIndex(i) for i in range(first, first + size)])
+            first += size
+        params = pywrapcp.DefaultRoutingSearchParameters()
+        params.first_solution_strategy = getattr(enums.FirstSolutionStrategy, self.first_solution)
+        params.local_search_metaheuristic = getattr(enums.LocalSearchMetaheuristic, self.metaheuristic)
+        params.time_limit.FromNanoseconds(max(int(seconds * 1e9), int(_MIN_RUN * 1e9)))
+        if self.solution_limit is not None:
+            params.solution_limit = self.solution_limit
+        params.log_search = False
+        began = time.perf_counter()
+        assignment = routing.SolveWithParameters(params)
+        took = time.perf_counter() - began
+        status = enums.RoutingSearchStatus.Value.Name(routing.status())
+        if assignment is None:
+            raise SolverError(f"OR-Tools found no tour on {problem.instance.name} "
+                              f"({status}, first solution {self.first_solution})")
+        visits, index = [], routing.Start(0)
+        while not routing.IsEnd(index):
+            visits.append(manager.IndexToNode(index))
+            index = assignment.Value(routing.NextVar(index))
+        tour = nodes[visits]
+        # A metaheuristic stopped by the limit reports plain success: the clock tells.
+        hit = status in _TIMED_OUT or took >= 0.99 * seconds
+        return tour, int(routing.solver().Solutions()), hit
