@@ -7,6 +7,16 @@ folded costs are used as they are when they are all whole numbers of at most :da
 K + 1 edges then stays below :data:`MAX_TOUR_UNITS`, far inside int64, or the costs are refused
 with a one-line :class:`~gtsp_bench.errors.InputError`: costs that are not finite, a scale that is
 not finite (a subnormal largest cost, whose tours could not be told apart), or sums that could wrap.
+
+The last case is out of reach of the instances this project accepts: the largest scaled cost is
+at most 2^40 (whole numbers up to :data:`MAX_EXACT`, or ``resolution`` <= 2^40), so (K + 1) of them
+stay below 2^60 for K < 2^20 clusters (GTSPLIB's largest has 17,180), and the loader's bound on a
+tour's cost (:data:`gtsp_bench.checks.MAX_TOUR_COST`, 2^53) keeps far-apart coordinates (up to
+:data:`gtsp_bench.checks.MAX_COORD`) well inside it too.
+
+Scaling does round: arcs are kept to about 1 / ``resolution`` of the largest one, so tours whose
+costs differ by less than K + 1 such units may be ranked wrongly inside the library (the answer is
+re-priced exactly; on GTSPLIB, whole numbers, nothing is rounded).
 """
 
 from __future__ import annotations
@@ -59,8 +69,12 @@ def folded_costs(
         scale = 1.0
     else:
         scale = resolution / top if top > 0 else 1.0
+    if not math.isfinite(scale):  # a subnormal largest cost: no unit is small enough
+        raise InputError(f"{solver}: the costs of {problem.instance.name} (up to {top:.6g}) are too "
+                         f"small to scale to integers that tell tours apart; use another solver")
     # A tour sums K + 1 edges: its scaled cost must stay far inside int64, or the sums wrap.
-    if not math.isfinite(scale) or not (problem.n_clusters + 1) * top * scale <= MAX_TOUR_UNITS:
+    if not (problem.n_clusters + 1) * top * scale <= MAX_TOUR_UNITS:
+        owner = library + ("'" if library.endswith("s") else "'s")
         raise InputError(f"{solver}: the costs of {problem.instance.name} (up to {top:.6g}) scaled to "
-                         f"integers would overflow {library}'s 64-bit sums; use another solver")
+                         f"integers would overflow {owner} 64-bit sums; use another solver")
     return np.round(cost * scale).astype(np.int64), scale
