@@ -201,3 +201,21 @@ def test_ortools_is_not_imported_by_the_registry_or_a_listing():
             "assert 'highspy' not in sys.modules\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_a_process_that_loaded_highspy_gets_one_clear_line():
+    """OR-Tools and highspy bundle clashing libhighs.so.1 builds: after highspy the solver refuses
+    with one InputError line instead of failing on an undefined symbol."""
+    pytest.importorskip("highspy")
+    code = ("import highspy\n"
+            "from gtsp_bench.errors import InputError\n"
+            "from gtsp_bench.generator import generate_instance\n"
+            "from gtsp_bench.registry import run_solver\n"
+            "try:\n"
+            "    run_solver('ortools', generate_instance(3, 2, seed=0), 0.5, time_limit=0.1)\n"
+            "except InputError as e:\n"
+            "    print(e)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("\n") == 1 and "cannot load OR-Tools in a process that has loaded " \
+        "highspy" in proc.stdout

@@ -26,12 +26,16 @@ deterministic, so in practice the seed does not change a run; and a run stopped 
 depends on the machine's speed whatever the seed. A run stopped by ``solution_limit`` is
 reproducible.
 
-OR-Tools is imported only when a solve starts (never by the registry or a listing); this module
-does not import highspy.
+OR-Tools is imported only when a solve starts (never by the registry or a listing). It cannot
+share a process with highspy (the ``milp`` solver's HiGHS): both wheels bundle a ``libhighs.so.1``
+of different versions, and whichever loads second fails on a missing symbol. This solver refuses
+with one :class:`InputError` line when highspy is already loaded; the benchmark runner runs each
+solver in its own worker, and ``gtsp-bench solve`` runs one solver.
 """
 
 from __future__ import annotations
 
+import sys
 import time
 
 import numpy as np
@@ -73,9 +77,17 @@ _MIN_RUN = 1e-3
 
 
 def _import_ortools():
+    """OR-Tools' routing modules, or one :class:`InputError` line saying why they cannot load."""
+    clash = ("solver 'ortools' cannot load OR-Tools in a process that has loaded highspy: both "
+             "bundle a different libhighs.so.1; run it in a process of its own (gtsp-bench solve "
+             "and the benchmark runner do)")
+    if "highspy" in sys.modules:
+        raise InputError(clash)
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as e:  # a required dependency: only a broken install gets here
+        if "undefined symbol" in str(e) and "Highs" in str(e):
+            raise InputError(clash) from None
         raise InputError(f"solver 'ortools' needs the package ortools ({e}); "
                          "install it with pip install ortools") from None
     return pywrapcp, routing_enums_pb2
