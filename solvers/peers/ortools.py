@@ -26,17 +26,26 @@ deterministic, so in practice the seed does not change a run; and a run stopped 
 depends on the machine's speed whatever the seed. A run stopped by ``solution_limit`` is
 reproducible.
 
-OR-Tools is imported only when a solve starts (never by the registry or a listing). It cannot
-share a process with highspy (the ``milp`` solver's HiGHS): both wheels bundle a ``libhighs.so.1``
-of different versions, and whichever loads second fails on a missing symbol. This solver refuses
-with one :class:`InputError` line when highspy is already loaded; the benchmark runner runs each
-solver in its own worker, and ``gtsp-bench solve`` runs one solver.
+OR-Tools never loads into the caller's process: the ortools and highspy wheels each bundle a
+``libhighs.so.1`` of a different version, and in one process whichever loads second fails on a
+missing symbol (so ``milp`` and ``ortools`` could not both run in a script, a notebook or pytest).
+The first solve starts a worker process (``python -m gtsp_bench.solvers.peers.ortools``) that
+imports OR-Tools and serves this process's later solves; it ends when this process does. Its
+start-up (about half a second) is not charged to the time limit. The registry and a listing import
+nothing of OR-Tools.
 """
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import os
+import pickle
+import subprocess
 import sys
+import threading
 import time
+from typing import Any
 
 import numpy as np
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
@@ -78,19 +87,161 @@ _MIN_RUN = 1e-3
 
 def _import_ortools():
     """OR-Tools' routing modules, or one :class:`InputError` line saying why they cannot load."""
-    clash = ("solver 'ortools' cannot load OR-Tools in a process that has loaded highspy: both "
-             "bundle a different libhighs.so.1; run it in a process of its own (gtsp-bench solve "
-             "and the benchmark runner do)")
-    if "highspy" in sys.modules:
-        raise InputError(clash)
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as e:  # a required dependency: only a broken install gets here
-        if "undefined symbol" in str(e) and "Highs" in str(e):
-            raise InputError(clash) from None
         raise InputError(f"solver 'ortools' needs the package ortools ({e}); "
                          "install it with pip install ortools") from None
     return pywrapcp, routing_enums_pb2
+
+
+def route(
+    cost: np.ndarray, sizes: list[int], first_solution: str, metaheuristic: str, seconds: float,
+    solution_limit: int | None, seed: int,
+) -> dict[str, Any]:
+    """One OR-Tools run (in the worker process): node 0 is the depot, then groups of ``sizes``
+    nodes, each a mandatory disjunction of cardinality 1; ``cost`` is the integer arc matrix.
+
+    Returns ``visits`` (the route's nodes from the depot), ``solutions`` (found by the search),
+    ``status`` (OR-Tools' name) and ``timed_out`` (the limit stopped the search).
+    """
+    pywrapcp, enums = _import_ortools()
+    manager = pywrapcp.RoutingIndexManager(len(cost), 1, 0)
+    routing = pywrapcp.RoutingModel(manager)
+    routing.solver().ReSeed(seed)
+    arcs = routing.RegisterTransitMatrix(cost.tolist())
+    routing.SetArcCostEvaluatorOfAllVehicles(arcs)
+    first = 1
+    for size in sizes:  # no penalty: the disjunction is mandatory, exactly one node visited
+        routing.AddDisjunction([manager.NodeToIndex(i) for i in range(first, first + size)])
+        first += size
+    params = pywrapcp.DefaultRoutingSearchParameters()
+    params.first_solution_strategy = getattr(enums.FirstSolutionStrategy, first_solution)
+    params.local_search_metaheuristic = getattr(enums.LocalSearchMetaheuristic, metaheuristic)
+    params.time_limit.FromNanoseconds(max(int(seconds * 1e9), int(_MIN_RUN * 1e9)))
+    if solution_limit is not None:
+        params.solution_limit = solution_limit
+    params.log_search = False
+    began = time.perf_counter()
+    assignment = routing.SolveWithParameters(params)
+    took = time.perf_counter() - began
+    status = enums.RoutingSearchStatus.Value.Name(routing.status())
+    if assignment is None:
+        raise SolverError(f"OR-Tools found no tour ({status}, first solution {first_solution})")
+    visits, index = [], routing.Start(0)
+    while not routing.IsEnd(index):
+        visits.append(manager.IndexToNode(index))
+        index = assignment.Value(routing.NextVar(index))
+    # A metaheuristic stopped by the limit reports plain success: the clock tells.
+    return {"visits": visits, "solutions": int(routing.solver().Solutions()), "status": status,
+            "timed_out": status in _TIMED_OUT or took >= 0.99 * seconds}
+
+
+class _Worker:
+    """The process OR-Tools runs in: ``python -m gtsp_bench.solvers.peers.ortools``, started on
+    the first solve and kept for the next ones; requests and answers are pickles on its stdin and
+    stdout. It ends when its stdin closes (this process ended or dropped it)."""
+
+    def __init__(self) -> None:
+        self.pid = os.getpid()
+        # The worker finds this package as this process did (its sys.path), and -P keeps the
+        # current folder off its path (a file named ortools.py there would hide OR-Tools).
+        path = [os.path.abspath(p) for p in sys.path if p]
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(dict.fromkeys(path))}
+        self.proc = subprocess.Popen(
+            [sys.executable, "-P", "-m", __name__], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL, env=env,
+        )
+
+    def call(self, request: dict[str, Any] | None) -> Any:
+        """Send ``request`` (``None``: only read the handshake) and return the answer; a lost
+        worker is a :class:`SolverError`."""
+        try:
+            if request is not None:
+                pickle.dump(request, self.proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                self.proc.stdin.flush()
+            kind, value = pickle.load(self.proc.stdout)
+        except (EOFError, OSError, pickle.UnpicklingError):
+            code = self.proc.poll()
+            raise SolverError(f"the OR-Tools worker process ended (exit code {code})") from None
+        if kind == "ok":
+            return value
+        raise (InputError if kind == "InputError" else SolverError)(value)
+
+    def close(self) -> None:
+        """End the worker: close its stdin, then kill it if it lingers."""
+        with contextlib.suppress(OSError):
+            self.proc.stdin.close()
+        try:
+            self.proc.wait(timeout=1.0)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+
+_WORKER: _Worker | None = None
+_LOCK = threading.Lock()
+
+
+def _call_worker(request: dict[str, Any] | None) -> Any:
+    """Run ``request`` in this process's OR-Tools worker (started if needed; ``None``: just start
+    it). A request that does not come back whole (an error, an interrupt) drops the worker, so a
+    late answer can never be read as the next one's."""
+    global _WORKER
+    with _LOCK:
+        if _WORKER is None or _WORKER.pid != os.getpid() or _WORKER.proc.poll() is not None:
+            _WORKER = _Worker()  # (a forked child never shares its parent's worker)
+            try:
+                _WORKER.call(None)
+            except BaseException:
+                _WORKER.close()
+                _WORKER = None
+                raise
+            atexit.register(_WORKER.close)
+        if request is None:
+            return None
+        try:
+            return _WORKER.call(request)
+        except SolverError:
+            if _WORKER.proc.poll() is None:
+                raise  # OR-Tools' own error: the worker is fine
+            _WORKER = None
+            raise
+        except BaseException:
+            _WORKER.close()
+            _WORKER = None
+            raise
+
+
+def _serve() -> None:
+    """The worker's loop: import OR-Tools, answer each pickled request until stdin closes."""
+    out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)  # anything printed by a library goes to stderr, never into the answers
+    source = sys.stdin.buffer
+
+    def answer(kind: str, value: Any) -> None:
+        pickle.dump((kind, value), out, protocol=pickle.HIGHEST_PROTOCOL)
+        out.flush()
+
+    try:
+        _import_ortools()
+    except InputError as e:
+        answer("InputError", str(e))
+        return
+    answer("ok", None)
+    while True:
+        try:
+            request = pickle.load(source)
+        except EOFError:
+            return
+        try:
+            result = ("ok", route(**request))
+        except Exception as e:  # sent back whole: the caller raises it
+            result = (type(e).__name__, str(e))
+        try:
+            answer(*result)
+        except (BrokenPipeError, OSError):
+            return
 
 
 class OrToolsPeer:
@@ -128,10 +279,10 @@ class OrToolsPeer:
         """Run OR-Tools (once per node of the smallest cluster when there is no depot)."""
         time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
         seed = check_seed(seed)
-        start = time.perf_counter()
         problem = price(instance, omega)
         cost, scale = folded_costs(problem, self.resolution, solver="ortools", library="OR-Tools")
-        pywrapcp, enums = _import_ortools()
+        _call_worker(None)  # started (OR-Tools imported) outside the time limit, as imports are
+        start = time.perf_counter()
         if problem.depot is not None:
             depots = [problem.depot]
         else:
@@ -142,14 +293,14 @@ class OrToolsPeer:
             if budget <= 0:
                 timed_out = True
                 break
-            tour, found, hit = self._run(pywrapcp, enums, problem, cost, depot, budget, seed)
+            tour, found, hit = self._run(problem, cost, depot, budget, seed)
             solutions += found
             timed_out |= hit
             c = problem.tour_cost(tour)
             if c < best_cost:
                 best, best_cost = tour, c
         if best is None:  # not even one run fitted: a tour is still owed
-            best = self._run(pywrapcp, enums, problem, cost, depots[0], _MIN_RUN, seed)[0]
+            best = self._run(problem, cost, depots[0], _MIN_RUN, seed)[0]
             best_cost = problem.tour_cost(best)
         order, heads = problem.to_solution(best)
         return Solution(order, heads, objective=best_cost,
@@ -157,8 +308,7 @@ class OrToolsPeer:
                         stats={"solutions": solutions, "scale": scale, "runs": len(depots)})
 
     def _run(
-        self, pywrapcp, enums, problem: Problem, cost: np.ndarray, depot: int, seconds: float,
-        seed: int,
+        self, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int,
     ) -> tuple[np.ndarray, int, bool]:
         """One OR-Tools run with ``depot`` as the depot: (tour, solutions, stopped by time)."""
         depot_cluster = int(problem.cluster_of[depot])
@@ -166,35 +316,17 @@ class OrToolsPeer:
         if not others:  # a single cluster and no depot: the tour is the node itself
             return np.array([depot]), 0, False
         nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
-        manager = pywrapcp.RoutingIndexManager(len(nodes), 1, 0)
-        routing = pywrapcp.RoutingModel(manager)
-        routing.solver().ReSeed(seed)
-        arcs = routing.RegisterTransitMatrix(cost[np.ix_(nodes, nodes)].tolist())
-        routing.SetArcCostEvaluatorOfAllVehicles(arcs)
-        first = 1
-        for c in others:  # local ids 1.. in the order of `nodes`; no penalty: mandatory, exactly 1
-            size = len(problem.clusters[c])
-            routing.AddDisjunction([manager.NodeToIndex(i) for i in range(first, first + size)])
-            first += size
-        params = pywrapcp.DefaultRoutingSearchParameters()
-        params.first_solution_strategy = getattr(enums.FirstSolutionStrategy, self.first_solution)
-        params.local_search_metaheuristic = getattr(enums.LocalSearchMetaheuristic, self.metaheuristic)
-        params.time_limit.FromNanoseconds(max(int(seconds * 1e9), int(_MIN_RUN * 1e9)))
-        if self.solution_limit is not None:
-            params.solution_limit = self.solution_limit
-        params.log_search = False
-        began = time.perf_counter()
-        assignment = routing.SolveWithParameters(params)
-        took = time.perf_counter() - began
-        status = enums.RoutingSearchStatus.Value.Name(routing.status())
-        if assignment is None:
-            raise SolverError(f"OR-Tools found no tour on {problem.instance.name} "
-                              f"({status}, first solution {self.first_solution})")
-        visits, index = [], routing.Start(0)
-        while not routing.IsEnd(index):
-            visits.append(manager.IndexToNode(index))
-            index = assignment.Value(routing.NextVar(index))
-        tour = nodes[visits]
-        # A metaheuristic stopped by the limit reports plain success: the clock tells.
-        hit = status in _TIMED_OUT or took >= 0.99 * seconds
-        return tour, int(routing.solver().Solutions()), hit
+        try:
+            out = _call_worker({
+                "cost": np.ascontiguousarray(cost[np.ix_(nodes, nodes)]),
+                "sizes": [len(problem.clusters[c]) for c in others],
+                "first_solution": self.first_solution, "metaheuristic": self.metaheuristic,
+                "seconds": seconds, "solution_limit": self.solution_limit, "seed": seed,
+            })
+        except SolverError as e:
+            raise SolverError(f"{problem.instance.name}: {e}") from None
+        return nodes[out["visits"]], out["solutions"], out["timed_out"]
+
+
+if __name__ == "__main__":
+    _serve()
