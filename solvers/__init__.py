@@ -57,4 +57,6 @@ BUILTIN: tuple[Builtin, ...] = (
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),
+    Builtin("lkh", f"{_P}.lkh:LKH",
+            "LKH-3 (elkai) as a peer on the Noon-Bean ATSP of the GTSP (optional extra)", bench=False),
 )
