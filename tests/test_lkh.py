@@ -177,9 +177,12 @@ def test_seed_reproduces_and_options_reach_lkh(monkeypatch):
     a = run_solver(get_solver("lkh", runs=2, max_trials=50), inst, 0.5, seed=3)
     b = run_solver(get_solver("lkh", runs=2, max_trials=50), inst, 0.5, seed=3)
     assert (a.order, a.heads) == (b.order, b.heads)
-    params = get_solver("lkh", runs=2, max_trials=50)._params(7.5, 3)
-    assert {"RUNS = 2", "MAX_TRIALS = 50", "SEED = 4", "TIME_LIMIT = 3.750000"} <= set(
-        params.splitlines())
+    params = get_solver("lkh", runs=2, max_trials=50, subgradient=False)._params(7.5, 3)
+    assert {"RUNS = 2", "MAX_TRIALS = 50", "SEED = 4", "TIME_LIMIT = 3.750000",
+            "SUBGRADIENT = NO"} <= set(params.splitlines())
+    assert "SUBGRADIENT" not in get_solver("lkh")._params(1.0, 0)
+    c = run_solver(get_solver("lkh", subgradient=False), inst, 0.5, seed=3)
+    assert c.objective >= run_solver("milp", inst, 0.5).objective - 1e-6
 
 
 def test_time_limit_status():
@@ -190,7 +193,8 @@ def test_time_limit_status():
     assert sorted(r.order) == list(range(20))
 
 
-@pytest.mark.parametrize("options", [{"runs": 0}, {"max_trials": 0}, {"runs": 1.5}])
+@pytest.mark.parametrize("options", [{"runs": 0}, {"max_trials": 0}, {"runs": 1.5},
+                                     {"subgradient": "no"}])
 def test_bad_options_rejected(options):
     """Invalid options raise InputError."""
     with pytest.raises(InputError):

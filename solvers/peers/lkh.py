@@ -25,21 +25,24 @@ clusters) the solver refuses with an :class:`InputError` rather than round the c
 
 LKH's tour is mapped back: the clusters in the order the tour meets them, each cluster's head the
 node by which the tour entered it. When the tour is not a contiguous Noon-Bean tour (LKH is a
-heuristic; it has never happened in our runs) the order it gives is kept and the heads are chosen
-optimally for it (:func:`~gtsp_bench.solvers.heads.optimal_heads`), ``stats["repaired"]`` says so.
-The returned tour is always priced exactly (:meth:`Problem.tour_cost`).
+heuristic: its first tours often are not, e.g. with ``max_trials=1``; with the defaults we have
+not seen one) the order it gives is kept and the heads are chosen optimally for it
+(:func:`~gtsp_bench.solvers.heads.optimal_heads`); ``stats["repaired"]`` says so. The returned
+tour is always priced exactly (:meth:`Problem.tour_cost`).
 
-What is controlled: ``runs`` and ``max_trials`` (LKH's ``RUNS`` and ``MAX_TRIALS``), the seed
-(LKH's ``SEED = seed + 1``, modulo 2^31 - 1), and the time limit, shared by the runs as LKH's
-per-run ``TIME_LIMIT`` (status ``time_limit`` when the whole solve reaches it). LKH checks that
-limit between trials and leaves out its preprocessing (the subgradient ascent that builds the
-candidate sets on the 2n-node symmetric graph of the ATSP), which always runs to the end and
-produces a first tour: about 0.5 s for n = 400 nodes, 4 s for n = 1000 and 25 s for n = 2000 on
-one core, so large instances overshoot a short limit. (LKH's ``TOTAL_TIME_LIMIT`` would count the
-preprocessing, but when it runs out first elkai returns no tour at all.) A run that stops on its
-own (``MAX_TRIALS``, by default n) is reproducible for a seed; one stopped by the limit is not.
-elkai's public ``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function
-it wraps, ``elkai._elkai.solve_problem(params, problem)``, with a full LKH parameter text.
+What is controlled: ``runs``, ``max_trials``, ``subgradient`` (LKH's ``RUNS``, ``MAX_TRIALS``,
+``SUBGRADIENT``), the seed (LKH's ``SEED = seed + 1``, modulo 2^31 - 1), and the time limit,
+shared by the runs as LKH's per-run ``TIME_LIMIT`` (status ``time_limit`` when the whole solve
+reaches it). LKH checks that limit between trials and leaves out its preprocessing (the
+subgradient ascent that builds the candidate sets on the 2n-node symmetric graph of the ATSP),
+which always runs to the end and produces a first tour: about 0.5 s for n = 400 nodes, 4 s for
+n = 1000, 25 s for n = 2000 and about 2 minutes for n = 4000 (K = 200 clusters of 20) on one
+core, so large instances overshoot a short limit; ``subgradient=False`` cuts it to a fraction of
+a second. (LKH's ``TOTAL_TIME_LIMIT`` would count the preprocessing, but when it runs out first
+elkai returns no tour at all.) A run that stops on its own (``MAX_TRIALS``, by default n) is
+reproducible for a seed; one stopped by the limit is not. elkai's public
+``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function it wraps,
+``elkai._elkai.solve_problem(params, problem)``, with a full LKH parameter text.
 
 LKH is free for academic and non-commercial use only (Keld Helsgaun's licence; elkai ships it
 under the same restriction). It is an optional extra: ``pip install 'gtsp-bench[lkh]'``.
@@ -54,7 +57,7 @@ from collections.abc import Sequence
 import numpy as np
 from gtsp_bench.solvers.heads import optimal_heads
 
-from gtsp_bench.checks import check_int, check_time_limit, default_time_limit
+from gtsp_bench.checks import check_bool, check_int, check_time_limit, default_time_limit
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
@@ -192,11 +195,15 @@ class LKH:
         LKH's ``RUNS`` (>= 1): independent runs, the best tour kept.
     max_trials
         LKH's ``MAX_TRIALS`` per run (>= 1), or ``None`` for LKH's default (the number of nodes).
+    subgradient
+        LKH's ``SUBGRADIENT``: ``False`` skips the subgradient ascent (candidate sets from the raw
+        weights): much less preprocessing, better on our energy instances, worse on GTSPLIB.
     """
 
-    def __init__(self, runs: int = 1, max_trials: int | None = None) -> None:
+    def __init__(self, runs: int = 1, max_trials: int | None = None, subgradient: bool = True) -> None:
         self.runs = check_int("runs", runs, 1)
         self.max_trials = None if max_trials is None else check_int("max_trials", max_trials, 1)
+        self.subgradient = check_bool("subgradient", subgradient)
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
@@ -238,6 +245,8 @@ class LKH:
                  "PROBLEM_FILE = :stdin:"]
         if self.max_trials is not None:
             lines.insert(1, f"MAX_TRIALS = {self.max_trials}")
+        if not self.subgradient:
+            lines.insert(1, "SUBGRADIENT = NO")
         return "\n".join(lines) + "\n"
 
 
