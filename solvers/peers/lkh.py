@@ -36,9 +36,9 @@ shared by the runs as LKH's per-run ``TIME_LIMIT`` (status ``time_limit`` when t
 reaches it). LKH checks that limit between trials and leaves out its preprocessing (the
 subgradient ascent that builds the candidate sets on the 2n-node symmetric graph of the ATSP),
 which always runs to the end and produces a first tour: about 0.5 s for n = 400 nodes, 4 s for
-n = 1000, 25 s for n = 2000 and about 2 minutes for n = 4000 (K = 200 clusters of 20) on one
-core, so large instances overshoot a short limit; ``subgradient=False`` cuts it to a fraction of
-a second. (LKH's ``TOTAL_TIME_LIMIT`` would count the preprocessing, but when it runs out first
+n = 1000, 25 s for n = 2000 and about 2 minutes for n = 4000 (K = 200 clusters of 20) on a
+shared core, so large instances overshoot a short limit; ``subgradient=False`` cuts it to a
+fraction of a second. (LKH's ``TOTAL_TIME_LIMIT`` would count the preprocessing, but when it runs out first
 elkai returns no tour at all.) A run that stops on its own (``MAX_TRIALS``, by default n) is
 reproducible for a seed; one stopped by the limit is not. elkai's public
 ``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function it wraps,
