@@ -60,4 +60,6 @@ BUILTIN: tuple[Builtin, ...] = (
     Builtin("ortools", f"{_P}.ortools:OrToolsPeer",
             "OR-Tools routing as a peer: one vehicle, a mandatory disjunction per cluster, GLS",
             bench=False),
+    Builtin("lkh", f"{_P}.lkh:LKH",
+            "LKH-3 (elkai) as a peer on the Noon-Bean ATSP of the GTSP (optional extra)", bench=False),
 )

@@ -9,9 +9,10 @@ import pytest
 
 from gtsp_bench.cli import main
 
-HEURISTICS = ["greedy+ls", "aco", "aco+ls", "lns"]
-if importlib.util.find_spec("pyvrp") is not None:
-    HEURISTICS.append("pyvrp")
+HEURISTICS = ["greedy+ls", "aco", "aco+ls", "lns", "ortools"]
+#: Peers whose package is an optional extra: tested where it is installed.
+HEURISTICS += [name for name, package in (("pyvrp", "pyvrp"), ("lkh", "elkai"))
+               if importlib.util.find_spec(package) is not None]
 
 
 @pytest.fixture

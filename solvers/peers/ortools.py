@@ -83,6 +83,8 @@ METAHEURISTICS = (
 _TIMED_OUT = ("ROUTING_PARTIAL_SUCCESS_LOCAL_OPTIMUM_NOT_REACHED", "ROUTING_FAIL_TIMEOUT")
 #: Shortest run handed to OR-Tools (seconds): a run owes a tour even when the budget is spent.
 _MIN_RUN = 1e-3
+#: Seconds allowed for the first tour alone when the limit ran out before it.
+_FIRST_TOUR_S = 60
 
 
 def _import_ortools():
@@ -126,6 +128,15 @@ def route(
     assignment = routing.SolveWithParameters(params)
     took = time.perf_counter() - began
     status = enums.RoutingSearchStatus.Value.Name(routing.status())
+    if assignment is None and status == "ROUTING_FAIL_TIMEOUT":
+        # The limit ran out before the first tour: take the first solution alone, as every
+        # solver returns its best tour when stopped by its limit.
+        params.solution_limit = 1
+        params.time_limit.FromSeconds(_FIRST_TOUR_S)
+        assignment = routing.SolveWithParameters(params)
+        took = time.perf_counter() - began
+        status = enums.RoutingSearchStatus.Value.Name(routing.status())
+        seconds = 0.0  # the limit is spent: the answer is marked as stopped by it
     if assignment is None:
         raise SolverError(f"OR-Tools found no tour ({status}, first solution {first_solution})")
     visits, index = [], routing.Start(0)
