@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import io
 import math
 import os
 import sys
@@ -58,13 +57,11 @@ from gtsp_bench.checks import parse_ks
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import atomic_write_bytes, atomic_write_text, read_instance
+from gtsp_bench.io import atomic_write_text, read_instance
 from gtsp_bench.parse import format_json_instance
 from gtsp_bench.pool import PhaseStats, run_jobs
 from gtsp_bench.report import (
-    PAPER_RUNTIME_S,
     ks_text,
-    parse_ints,
     read_training_logs,
     write_report,
 )
@@ -449,75 +446,6 @@ def experiment_rows(config: BenchConfig, experiment: str, sets: Mapping[int, lis
     return pd.DataFrame(rows, columns=list(CSV_COLUMNS))
 
 
-# ---------------------------------------------------------------------- figures
-def _save(fig: Any, path: Path) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    atomic_write_bytes(path, buf.getvalue())
-
-
-def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Any, np.ndarray]:
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(size[0] * ncols, size[1] * nrows), layout="constrained")
-    axes = np.atleast_2d(fig.subplots(nrows, ncols, squeeze=False))
-    return fig, axes
-
-
-def figure_for(config: BenchConfig, experiment: str, df: pd.DataFrame,
-               sets: Mapping[int, list[StoredInstance]]) -> Any:
-    """The PNG figure of an experiment from its table."""
-    from gtsp_bench import plots
-
-    if experiment == "ratio-omega":
-        ks = sorted(df["K"].unique())
-        fig, axes = _figure(1, len(ks), (5.5, 4))
-        for ax, k in zip(axes[0], ks, strict=True):
-            sub = df[df["K"] == k]
-            plots.plot_ratio(sub, "omega", ax=ax, reference=sub["reference"].iloc[0])
-            ax.set_title(f"Energy / optimum, K = {k} ({sub['instance'].nunique()} instances)")
-        return fig
-    if experiment == "ratio-k":
-        fig, axes = _figure(1, 1, (6, 4))
-        plots.plot_ratio(df, "K", ax=axes[0, 0], reference="/".join(sorted(df["reference"].unique())))
-        axes[0, 0].set_title(f"Energy / optimum, omega = {RATIO_K_OMEGA:g}")
-        return fig
-    if experiment == "runtime":
-        fig, axes = _figure(1, 1, (6.5, 4.5))
-        plots.plot_runtime(df, ax=axes[0, 0], paper=PAPER_RUNTIME_S)
-        return fig
-    if experiment == "trajectories":
-        ks = sorted(df["K"].unique())
-        ncols = max(len(df[df["K"] == k]["omega"].unique()) for k in ks)
-        fig, axes = _figure(len(ks), ncols, (4.6, 4.6))
-        for r, k in enumerate(ks):
-            sub = df[df["K"] == k]
-            omegas = sorted(sub["omega"].unique())
-            for c in range(ncols):
-                ax = axes[r, c]
-                if c >= len(omegas):
-                    ax.set_visible(False)
-                    continue
-                panel = sub[sub["omega"] == omegas[c]]
-                tours = {row.solver: (parse_ints(row.order), parse_ints(row.heads))
-                         for row in panel.itertuples() if row.order}
-                plots.plot_trajectory(sets[k][0].instance, tours, ax=ax,
-                                      title=f"K = {k}, omega = {omegas[c]:g}")
-        return fig
-    raise ValueError(experiment)
-
-
-def training_figure(df: pd.DataFrame) -> Any:
-    """Actor loss, training reward and validation energy against training step, per model."""
-    from gtsp_bench import plots
-
-    fig, axes = _figure(1, 3, (5.5, 4))
-    plots.plot_training(df, "loss", ax=axes[0, 0])
-    plots.plot_training(df, "reward", ax=axes[0, 1])
-    plots.plot_training(df, "val_energy", ax=axes[0, 2])
-    return fig
-
-
 # ---------------------------------------------------------------------- the run
 @dataclass
 class RunSummary:
@@ -614,6 +542,8 @@ def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
                   records: Mapping[str, Mapping[str, Any]], summary: RunSummary,
                   say: Callable[[str], None]) -> None:
     """Write each experiment's CSV and PNG, then refresh the report."""
+    from gtsp_bench import figures
+
     for exp in config.experiments:
         csv_path, png_path = config.out_dir / f"{exp}.csv", config.out_dir / f"{exp}.png"
         if exp == "training":
@@ -621,12 +551,12 @@ def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
             if df is None:
                 say(f"training: no training log {config.checkpoint_dir}/<model>.train.csv; skipped")
                 continue
-            fig = training_figure(df)
+            fig = figures.training_figure(df)
         else:
             df = experiment_rows(config, exp, sets, records)
-            fig = figure_for(config, exp, df, sets)
+            fig = figures.experiment_figure(exp, df, {k: s[0].instance for k, s in sets.items()})
         atomic_write_text(csv_path, df.to_csv(index=False, float_format="%.10g"))
-        _save(fig, png_path)
+        figures.save_png(fig, png_path)
         summary.written += [csv_path, png_path]
     path = write_report(config.out_dir, config.checkpoint_dir, config.jobs)
     summary.written.append(path)
