@@ -48,6 +48,7 @@ import time
 from typing import Any
 
 import numpy as np
+from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
 from gtsp_bench.checks import (
@@ -294,25 +295,10 @@ class OrToolsPeer:
         cost, scale = folded_costs(problem, self.resolution, solver="ortools", library="OR-Tools")
         _call_worker(None)  # started (OR-Tools imported) outside the time limit, as imports are
         start = time.perf_counter()
-        if problem.depot is not None:
-            depots = [problem.depot]
-        else:
-            depots = [int(v) for v in min(problem.clusters, key=len)]
-        best, best_cost, timed_out, solutions = None, np.inf, False, 0
-        for n_done, depot in enumerate(depots):
-            budget = (time_limit - (time.perf_counter() - start)) / (len(depots) - n_done)
-            if budget <= 0:
-                timed_out = True
-                break
-            tour, found, hit = self._run(problem, cost, depot, budget, seed)
-            solutions += found
-            timed_out |= hit
-            c = problem.tour_cost(tour)
-            if c < best_cost:
-                best, best_cost = tour, c
-        if best is None:  # not even one run fitted: a tour is still owed
-            best = self._run(problem, cost, depots[0], _MIN_RUN, seed)[0]
-            best_cost = problem.tour_cost(best)
+        depots = depot_candidates(problem)
+        best, best_cost, timed_out, solutions = best_of_runs(
+            problem, depots, time_limit, start,
+            lambda depot, budget: self._run(problem, cost, depot, budget, seed), _MIN_RUN)
         order, heads = problem.to_solution(best)
         return Solution(order, heads, objective=best_cost,
                         status="time_limit" if timed_out else "feasible",

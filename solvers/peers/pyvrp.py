@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
 from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
@@ -69,26 +70,10 @@ class PyVRPPeer:
         start = time.perf_counter()
         problem = price(instance, omega)
         cost, scale = folded_costs(problem, self.resolution)
-        if problem.depot is not None:
-            depots = [problem.depot]
-        else:
-            depots = [int(v) for v in min(problem.clusters, key=len)]
-        best, best_cost, timed_out, iterations = None, np.inf, False, 0
-        for n_done, depot in enumerate(depots):
-            left = time_limit - (time.perf_counter() - start)
-            budget = left / (len(depots) - n_done)
-            if budget <= 0:
-                timed_out = True
-                break
-            tour, its, hit = self._run(pyvrp, problem, cost, depot, budget, seed)
-            iterations += its
-            timed_out |= hit
-            c = problem.tour_cost(tour)
-            if c < best_cost:
-                best, best_cost = tour, c
-        if best is None:  # not even one run fitted: a tour is still owed
-            best = self._run(pyvrp, problem, cost, depots[0], 1e-3, seed)[0]
-            best_cost = problem.tour_cost(best)
+        depots = depot_candidates(problem)
+        best, best_cost, timed_out, iterations = best_of_runs(
+            problem, depots, time_limit, start,
+            lambda depot, budget: self._run(pyvrp, problem, cost, depot, budget, seed), 1e-3)
         order, heads = problem.to_solution(best)
         return Solution(order, heads, objective=best_cost,
                         status="time_limit" if timed_out else "feasible",
