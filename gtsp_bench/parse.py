@@ -376,18 +376,16 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
         raise InputError(f"EDGE_WEIGHT_SECTION has {values.size} values, {fmt} needs {needed}")
     if fmt == "FULL_MATRIX":
         w = values.reshape(dim, dim).copy()
-        np.fill_diagonal(w, 0.0)
-        check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
-        if not np.allclose(w, w.T):
-            raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
     else:
         w = np.zeros((dim, dim))
         offset = 0 if diagonal else 1
         rows, cols = np.triu_indices(dim, offset) if triangle == "upper" else np.tril_indices(dim, -offset)
         w[rows, cols] = values
         w[cols, rows] = values
-        np.fill_diagonal(w, 0.0)
-        check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)
+    np.fill_diagonal(w, 0.0)
+    check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
+    if fmt == "FULL_MATRIX" and not np.allclose(w, w.T):  # a triangle is symmetric as built
+        raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
     return w
 
 
