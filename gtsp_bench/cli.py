@@ -494,17 +494,16 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")
     from gtsp_bench.report import write_report
-    from gtsp_bench.runner import DEFAULT_SEED, DEFAULT_TIME_LIMIT, make_config, run_bench
+    from gtsp_bench.runner import make_config, run_bench
 
+    # Options left out (None: shared with the suites, whose defaults differ) take make_config's.
+    given = {"experiments": args.experiments, "reference": args.reference, "n_nodes": args.nodes,
+             "seed": args.seed, "time_limit": args.time_limit, "instance_dir": args.instance_dir}
     config = make_config(
-        experiments=args.experiments or "all", ks=args.clusters, solvers=args.solvers,
-        reference=args.reference or "auto", n_instances=args.instances,
-        n_nodes=20 if args.nodes is None else args.nodes,
-        seed=DEFAULT_SEED if args.seed is None else args.seed,
-        time_limit=DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit,
-        jobs=args.jobs, quick=args.quick, out_dir=args.out,
-        instance_dir=args.instance_dir or "instances", checkpoint_dir=args.checkpoints,
-        fresh=args.fresh, retry_failed=args.retry_failed, progress=not args.no_progress,
+        ks=args.clusters, solvers=args.solvers, n_instances=args.instances, jobs=args.jobs,
+        quick=args.quick, out_dir=args.out, checkpoint_dir=args.checkpoints, fresh=args.fresh,
+        retry_failed=args.retry_failed, progress=not args.no_progress,
+        **{k: v for k, v in given.items() if v is not None},
     )
     if args.report_only:
         if not any(config.out_dir.glob("*.csv")):
