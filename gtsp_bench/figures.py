@@ -28,7 +28,7 @@ def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Any, np.
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(size[0] * ncols, size[1] * nrows), layout="constrained")
-    axes = np.atleast_2d(fig.subplots(nrows, ncols, squeeze=False))
+    axes = fig.subplots(nrows, ncols, squeeze=False)
     return fig, axes
 
 

@@ -263,7 +263,7 @@ def make_suite_config(suite: str, *, quick: bool = False, out_dir: str | os.Path
         max_nodes=None if max_nodes is None else check_int("max nodes", max_nodes, 1),
         dp_max_k=check_int("dp max K", given.get("dp_max_k", 12), 1),
         exact=parse_exact(given.get("exact", "dp:10,milp")),
-        exact_time_limit=check_time_limit(given.get("exact_time_limit", 120.0)) or 120.0,
+        exact_time_limit=check_time_limit(given.get("exact_time_limit", 120.0)),
         cache=Path(given.get("cache", DEFAULT_CACHE)),
         out_dir=Path(out_dir) if out_dir is not None else DEFAULT_OUT, quick=quick,
     )
@@ -484,7 +484,6 @@ def exact_optima(cache: Path, instances: Mapping[int, Sequence[Instance]],
     adding them to the cache)."""
     import csv
 
-    from gtsp_bench.io import atomic_write_text
     from gtsp_bench.registry import run_solver
 
     known: dict[tuple[str, float], float] = {}
@@ -502,9 +501,8 @@ def exact_optima(cache: Path, instances: Mapping[int, Sequence[Instance]],
         if (i + 1) % 50 == 0 or i + 1 == len(missing):
             _say(f"exact optima: {i + 1}/{len(missing)}")
     if missing:
-        lines = ["instance,omega,optimum"] + [f"{n},{w},{v!r}" for (n, w), v in sorted(known.items())]
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(cache, "\n".join(lines) + "\n")
+        write_csv(cache, ("instance", "omega", "optimum"),
+                  ([n, w, v] for (n, w), v in sorted(known.items())))
     return known
 
 

@@ -66,10 +66,10 @@ def solve(group: str, instance: Instance, omega: float | None, solver: str, time
     solver does not take) becomes a ``refused`` row, a solver's failure (a :class:`SolverError`) a
     ``failed`` row, and so does any other exception the solver raises; each has the error's first
     line as its note."""
-    from gtsp_bench.registry import get_solver, run_solver
+    from gtsp_bench.registry import run_solver
 
     try:
-        r = run_solver(get_solver(solver), instance, omega, time_limit=time_limit, seed=seed)
+        r = run_solver(solver, instance, omega, time_limit=time_limit, seed=seed)
     except Exception as e:
         status = "refused" if isinstance(e, InputError) else "failed"
         text = str(e) if isinstance(e, (InputError, SolverError)) else f"{type(e).__name__}: {e}"
@@ -147,6 +147,5 @@ def write_csv(path: str | os.PathLike[str], columns: Sequence[str],
     writer.writerow(columns)
     writer.writerows(records)
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, buf.getvalue())
+    atomic_write_text(out, buf.getvalue())  # creates the folder
     return out
