@@ -475,12 +475,10 @@ _SUITE_ONLY = ("omegas", "solver_seed", "dp_max_k", "exact", "exact_time_limit",
                "max_nodes", "no_gtsplib", "no_generated", "repeats", "cache")
 
 
-def _flag(dest: str) -> str:
-    return "--" + dest.replace("_", "-")
-
-
 def _given(args: argparse.Namespace, dests: Sequence[str]) -> list[str]:
-    return [_flag(d) for d in dests if getattr(args, d) is not None and getattr(args, d) is not False]
+    from gtsp_bench.suites import flag
+
+    return [flag(d) for d in dests if getattr(args, d) is not None and getattr(args, d) is not False]
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:

@@ -173,9 +173,9 @@ def resolve_references(reference: str | None, ks: Iterable[int], registered: Seq
 def shipped_checkpoints() -> Path:
     """The folder of the shipped models and their training logs (``solvers/learned/checkpoints``
     in the repository), found without importing the learned solvers."""
-    import gtsp_bench.solvers
+    from gtsp_bench.solvers.learned import CHECKPOINT_DIR
 
-    return Path(gtsp_bench.solvers.__file__).resolve().parent / "learned" / "checkpoints"
+    return CHECKPOINT_DIR
 
 
 def make_config(

@@ -14,5 +14,11 @@ Modules, each importing only those above it:
 * ``recipes``: the named training recipes (``RECIPES``: drl, drl-paper, am; ``get_recipe``);
 * ``train``: the training loop.
 
-Importing this package imports nothing (and not torch).
+Importing this package imports only :mod:`pathlib` (not torch): it names the shipped models'
+folder, which the runner reads training logs from without loading a policy.
 """
+
+from pathlib import Path
+
+#: Where the shipped checkpoints (``<model>.pt``, ``.json``, ``.train.csv``) live.
+CHECKPOINT_DIR = Path(__file__).resolve().parent / "checkpoints"

@@ -14,6 +14,7 @@ import io
 from pathlib import Path
 
 import torch
+from gtsp_bench.solvers.learned import CHECKPOINT_DIR
 from gtsp_bench.solvers.learned.policies import build_policy
 from torch import nn
 
@@ -21,7 +22,6 @@ from gtsp_bench.errors import InputError
 from gtsp_bench.io import atomic_write_bytes
 
 #: Where the shipped checkpoints live.
-CHECKPOINT_DIR = Path(__file__).resolve().parent / "checkpoints"
 #: Marker of a policy file.
 FILE_KIND = "gtsp-bench-policy"
 

@@ -140,7 +140,6 @@ class DRL(LearnedSolver):
     """
 
     model_name = "drl"
-    default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, threads: int = 1,
                  reverse: bool = False) -> None:
@@ -151,7 +150,6 @@ class DRLSample(LearnedSolver):
     """The paper's policy: the best of the greedy tour and ``samples`` sampled tours (default 64)."""
 
     model_name = "drl"
-    default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 64,
                  threads: int = 1, reverse: bool = False) -> None:
