@@ -34,6 +34,13 @@ def default_time_limit(n_clusters: int) -> float:
     return min(MAX_DEFAULT_SECONDS, max(1.0, SECONDS_PER_CLUSTER * n_clusters))
 
 
+def time_limit_or_default(time_limit: object, n_clusters: int) -> float:
+    """A solver's time limit: ``time_limit`` checked by :func:`check_time_limit`, or when it is
+    ``None`` the default for ``n_clusters`` clusters (:func:`default_time_limit`)."""
+    checked = check_time_limit(time_limit)
+    return checked if checked is not None else default_time_limit(n_clusters)
+
+
 def check_int(name: str, value: object, low: int) -> int:
     """``value`` as an int if it is an integer >= ``low``, else :class:`InputError`."""
     if not is_int(value) or value < low:  # type: ignore[operator]

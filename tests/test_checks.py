@@ -178,3 +178,13 @@ def test_no_hand_written_type_checks_outside_this_module():
                     and len(node.args) == 2 and ast.unparse(node.args[1]) == "bool"):
                 found.append(f"{path.relative_to(REPO)}:{node.lineno}")
     assert not found, f"use gtsp_bench.checks instead: {found}"
+
+
+def test_time_limit_or_default():
+    """A given limit is checked and kept; None takes the per-K default; a bad one is refused."""
+    from gtsp_bench.checks import time_limit_or_default
+
+    assert time_limit_or_default(2, 50) == 2.0
+    assert time_limit_or_default(None, 50) == default_time_limit(50) == 25.0
+    with pytest.raises(InputError, match="time limit must be > 0 seconds"):
+        time_limit_or_default(0, 50)

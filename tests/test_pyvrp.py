@@ -27,7 +27,7 @@ def test_folded_costs_price_tours_exactly():
     """Half of each end's node cost on every edge: a tour's folded sum is its cost (scaled)."""
     inst = generate_instance(5, 4, seed=0)
     problem = price(inst, 0.6)
-    cost, scale = folded_costs(problem)
+    cost, scale = folded_costs(problem, solver="pyvrp", library="PyVRP")
     rng = np.random.default_rng(0)
     for _ in range(5):
         tour = np.array([problem.depot] + [rng.choice(c) for c in problem.clusters[:-1]])
@@ -39,7 +39,7 @@ def test_folded_costs_price_tours_exactly():
 def test_whole_number_costs_are_not_scaled():
     """GTSPLIB weights are integers: they are used as they are."""
     problem = price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
-    cost, scale = folded_costs(problem)
+    cost, scale = folded_costs(problem, solver="pyvrp", library="PyVRP")
     assert scale == 1.0
     assert np.array_equal(cost, problem.edge_cost.astype(np.int64))
 
@@ -114,19 +114,19 @@ def test_costs_that_would_overflow_the_integer_sums_are_refused(monkeypatch):
     from gtsp_bench.solvers.peers import scaling as peer
 
     problem = price(generate_instance(3, 2, seed=0), 0.5)
-    assert folded_costs(problem)[0].max() > 0
+    assert folded_costs(problem, solver="pyvrp", library="PyVRP")[0].max() > 0
     monkeypatch.setattr(peer, "MAX_TOUR_UNITS", 10)
     with pytest.raises(InputError, match="would overflow PyVRP's 64-bit sums"):
-        folded_costs(problem)
+        folded_costs(problem, solver="pyvrp", library="PyVRP")
     monkeypatch.undo()
     tiny = Instance(name="tiny", clusters=(np.array([[0.0, 0.0]]), np.array([[1.0, 0.0]])),
                     params=None, edge_weight_type="EXPLICIT",
                     weights=np.array([[0.0, 1e-320], [1e-320, 0.0]]))
     with pytest.raises(InputError, match="too small to scale to integers"):
-        folded_costs(price(tiny, None))
+        folded_costs(price(tiny, None), solver="pyvrp", library="PyVRP")
     far = Instance(name="far", clusters=(np.array([[0.0, 0.0]]), np.array([[1e308, -1e308]])),
                    params=None, edge_weight_type="EUC_2D")
     with np.errstate(over="ignore"):  # built directly: a file would be refused at load
         far_problem = price(far, None)
     with pytest.raises(InputError, match="not finite numbers"):
-        folded_costs(far_problem)
+        folded_costs(far_problem, solver="pyvrp", library="PyVRP")

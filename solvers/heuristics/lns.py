@@ -28,7 +28,11 @@ import numpy as np
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch, anchor_node, deadline_after, is_past
 
-from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
+from gtsp_bench.checks import (
+    check_float,
+    check_int,
+    time_limit_or_default,
+)
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
@@ -248,7 +252,7 @@ class Lns:
 
         Without a time limit, :func:`default_time_limit` applies.
         """
-        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         deadline = deadline_after(time_limit)
         problem = price(instance, omega)
         search = _Search(problem, self.settings, np.random.default_rng(seed))

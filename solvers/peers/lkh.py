@@ -57,7 +57,11 @@ from collections.abc import Sequence
 import numpy as np
 from gtsp_bench.solvers.heads import optimal_heads
 
-from gtsp_bench.checks import check_bool, check_int, check_time_limit, default_time_limit
+from gtsp_bench.checks import (
+    check_bool,
+    check_int,
+    time_limit_or_default,
+)
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
@@ -211,7 +215,7 @@ class LKH:
     ) -> Solution:
         """Transform, run LKH once, map back and price exactly."""
         elkai = _import_elkai()
-        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         start = time.perf_counter()
         problem = price(instance, omega)
         stats: dict = {"lkh": False, "repaired": False}

@@ -56,8 +56,7 @@ from gtsp_bench.checks import (
     check_float,
     check_int,
     check_seed,
-    check_time_limit,
-    default_time_limit,
+    time_limit_or_default,
 )
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
@@ -289,7 +288,7 @@ class OrToolsPeer:
         seed: int = 0,
     ) -> Solution:
         """Run OR-Tools (once per node of the smallest cluster when there is no depot)."""
-        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         seed = check_seed(seed)
         problem = price(instance, omega)
         cost, scale = folded_costs(problem, self.resolution, solver="ortools", library="OR-Tools")

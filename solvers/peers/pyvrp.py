@@ -24,7 +24,11 @@ import numpy as np
 from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
-from gtsp_bench.checks import check_float, check_int, check_time_limit, default_time_limit
+from gtsp_bench.checks import (
+    check_float,
+    check_int,
+    time_limit_or_default,
+)
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
@@ -66,10 +70,10 @@ class PyVRPPeer:
     ) -> Solution:
         """Run PyVRP (once per node of the smallest cluster when there is no depot)."""
         pyvrp = _import_pyvrp()
-        time_limit = check_time_limit(time_limit) or default_time_limit(instance.n_clusters)
+        time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         start = time.perf_counter()
         problem = price(instance, omega)
-        cost, scale = folded_costs(problem, self.resolution)
+        cost, scale = folded_costs(problem, self.resolution, solver="pyvrp", library="PyVRP")
         depots = depot_candidates(problem)
         best, best_cost, timed_out, iterations = best_of_runs(
             problem, depots, time_limit, start,

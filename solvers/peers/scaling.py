@@ -38,7 +38,7 @@ MAX_TOUR_UNITS = 2**60
 
 
 def folded_costs(
-    problem: Problem, resolution: float = RESOLUTION, *, solver: str = "pyvrp", library: str = "PyVRP"
+    problem: Problem, resolution: float = RESOLUTION, *, solver: str, library: str
 ) -> tuple[np.ndarray, float]:
     """Integer edge costs with the node costs folded in, and the scale used.
 
