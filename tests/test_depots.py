@@ -7,10 +7,11 @@ import time
 
 import numpy as np
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
+from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates, run_nodes
 
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.gtsplib import read
+from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 
 
@@ -57,3 +58,18 @@ def test_a_tour_is_owed_when_no_run_fits():
     best, cost, timed_out, _ = best_of_runs(problem, depot_candidates(problem), 1e-9,
                                             time.perf_counter() - 1.0, run, 1e-3)
     assert calls == [1e-3] and timed_out and cost == problem.tour_cost(best)
+
+
+def test_run_nodes_put_the_depot_first_then_the_other_clusters():
+    """From a node of 11berlin52's smallest cluster: that node, then every node of the other
+    clusters in cluster order, and those clusters; a one-cluster instance has no others."""
+    problem = price(read("11berlin52"), None)
+    depot = depot_candidates(problem)[0]
+    nodes, others = run_nodes(problem, depot)
+    home = int(problem.cluster_of[depot])
+    assert others == [c for c in range(problem.n_clusters) if c != home]
+    assert nodes[0] == depot and nodes[1:].tolist() == np.concatenate(
+        [problem.clusters[c] for c in others]).tolist()
+    single = price(Instance(name="one", clusters=(np.array([[0.0, 0.0], [3.0, 4.0]]),), depot=None), 0.5)
+    nodes, others = run_nodes(single, 1)
+    assert others == [] and nodes.tolist() == [1]

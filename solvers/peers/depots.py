@@ -23,6 +23,16 @@ def depot_candidates(problem: Problem) -> list[int]:
     return [int(v) for v in min(problem.clusters, key=len)]
 
 
+def run_nodes(problem: Problem, depot: int) -> tuple[np.ndarray, list[int]]:
+    """The nodes of one run from ``depot``: the depot first, then every node of the other
+    clusters in cluster order; and those other clusters (none: the depot's cluster is the only
+    one, and the tour is the depot alone)."""
+    depot_cluster = int(problem.cluster_of[depot])
+    others = [c for c in range(problem.n_clusters) if c != depot_cluster]
+    nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
+    return nodes, others
+
+
 def best_of_runs(problem: Problem, depots: list[int], time_limit: float, start: float, run: Run,
                  min_run: float) -> tuple[np.ndarray, float, bool, int]:
     """Run from each depot in turn, each with an equal share of the time left since ``start``

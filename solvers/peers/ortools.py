@@ -48,7 +48,7 @@ import time
 from typing import Any
 
 import numpy as np
-from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
+from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates, run_nodes
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
 from gtsp_bench.checks import (
@@ -307,11 +307,9 @@ class OrToolsPeer:
         self, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int,
     ) -> tuple[np.ndarray, int, bool]:
         """One OR-Tools run with ``depot`` as the depot: (tour, solutions, stopped by time)."""
-        depot_cluster = int(problem.cluster_of[depot])
-        others = [c for c in range(problem.n_clusters) if c != depot_cluster]
+        nodes, others = run_nodes(problem, depot)
         if not others:  # a single cluster and no depot: the tour is the node itself
             return np.array([depot]), 0, False
-        nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
         try:
             out = _call_worker({
                 "cost": np.ascontiguousarray(cost[np.ix_(nodes, nodes)]),

@@ -21,7 +21,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates
+from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates, run_nodes
 from gtsp_bench.solvers.peers.scaling import MAX_EXACT, RESOLUTION, folded_costs
 
 from gtsp_bench.checks import (
@@ -87,11 +87,9 @@ class PyVRPPeer:
         self, pyvrp, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int
     ) -> tuple[np.ndarray, int, bool]:
         """One PyVRP run with ``depot`` as the depot: (tour, iterations, stopped by time)."""
-        depot_cluster = int(problem.cluster_of[depot])
-        others = [c for c in range(problem.n_clusters) if c != depot_cluster]
+        nodes, others = run_nodes(problem, depot)
         if not others:  # a single cluster and no depot: the tour is the node itself
             return np.array([depot]), 0, False
-        nodes = np.concatenate([[depot], *(problem.clusters[c] for c in others)]).astype(np.int64)
         locations = [pyvrp.Location(0.0, 0.0) for _ in nodes]  # coordinates unused: matrix given
         clients, groups = [], []
         for g, c in enumerate(others):
