@@ -157,7 +157,7 @@ def test_broken_atsp_tour_is_repaired(monkeypatch):
     the solution says so; it is still a valid tour priced exactly."""
     inst = generate_instance(5, 3, seed=1)
     problem = price(inst, 0.5)
-    scrambled = np.random.default_rng(0).permutation(problem.n_nodes)
+    scrambled = np.random.default_rng(2).permutation(problem.n_nodes)
     assert not tour_from_atsp(scrambled, problem.cluster_of)[1]
 
     class Fake:
@@ -168,6 +168,10 @@ def test_broken_atsp_tour_is_repaired(monkeypatch):
     monkeypatch.setattr(peer, "_import_elkai", lambda: Fake)
     r = run_solver("lkh", inst, 0.5)
     assert r.stats["repaired"] is True
+    tour = tour_from_atsp(scrambled, problem.cluster_of)[0]
+    assert problem.depot not in (tour[0], tour[-1])  # in the middle: the order starts after it
+    tour = np.roll(tour, -int(np.flatnonzero(tour == problem.depot)[0]))
+    assert list(r.order) == [int(c) for c in problem.cluster_of[tour[1:]]]
     assert r.objective == pytest.approx(problem.tour_cost(problem.to_tour(r.order, r.heads)), rel=1e-12)
 
 

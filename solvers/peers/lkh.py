@@ -232,7 +232,9 @@ class LKH:
                 raise SolverError(f"LKH returned no tour through all nodes of {instance.name}")
             tour, contiguous = tour_from_atsp(atsp, problem.cluster_of)
             stats["atsp_cost"] = int(matrix[atsp, np.roll(atsp, -1)].sum())
-            if not contiguous:
+            if not contiguous:  # keep the cyclic order from the depot on, re-choose the heads
+                if problem.depot is not None:
+                    tour = np.roll(tour, -int(np.flatnonzero(tour == problem.depot)[0]))
                 order = [int(c) for c in problem.cluster_of[tour] if c < instance.n_clusters]
                 tour = optimal_heads(problem, order)[0]
                 stats["repaired"] = True
