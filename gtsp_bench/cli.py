@@ -52,6 +52,11 @@ With --suite, run a side-by-side suite instead: exact (time to proven optimum, G
 best known), heuristics (mean gap and median time) or learned (the learned policies against the
 optimum). Its table goes to stdout, one CSV row per solve to OUT/<suite>.csv (default OUT:
 benchmarks/out).
+
+With --set, sweep solvers over any instance sets instead (GTSPLIB, the UAV sets under instances/,
+a folder of your own): one solve per instance x solver x omega x seed, gaps to each set's
+reference.csv ("to optimum" or "to best known"), OUT/sweep.csv, OUT/summary.md (also on stdout),
+a performance profile OUT/profile.csv/.png and gap plots (default OUT: benchmarks/out/sets).
 """
 
 _BENCH_EPILOG = """\
@@ -61,6 +66,8 @@ suites (--suite NAME) and the options each takes besides -K, --solvers, --instan
   heuristics  --seed --time-limit --omegas (one) --solver-seed --exact --exact-time-limit
               --gtsplib --names --max-nodes --no-gtsplib
   learned     --repeats --cache
+--set NAME|PATH (repeatable) takes -K --solvers --instances --time-limit --out --omegas --seeds
+  --names --max-nodes --jobs --instance-dir --fresh --retry-failed --no-progress --update-reference
 
 examples:
   gtsp-bench bench -K 4..10                       # the paper's experiments into results/
@@ -68,6 +75,8 @@ examples:
   gtsp-bench bench --suite exact -K 4..7,10 --omegas 0.5 --time-limit 30 --no-gtsplib
   gtsp-bench bench --suite heuristics --quick     # 3 instances per K, 5 s per solve
   gtsp-bench bench --suite learned -K 4 --instances 20 --solvers drl,am
+  gtsp-bench bench --set gtsplib --solvers greedy,lns --time-limit 5 --max-nodes 500
+  gtsp-bench bench --set uav-K50-N20-s1 --set my/folder --omegas 0.2,0.8 --seeds 0..4
 """
 
 
@@ -244,6 +253,18 @@ def build_parser() -> argparse.ArgumentParser:
                    "(suites: their quick preset)")
     p.add_argument("--out", "-o", metavar="DIR",
                    help="output folder (default: results; suites: benchmarks/out)")
+    g = p.add_argument_group("instance sets (--set)")
+    g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",
+                   help="sweep over an instance set, repeatable: 'gtsplib' (the bundled GTSPLIB, "
+                   "symmetric instances), a folder name under instances/ (uav-K10-N20-s1, ...), or "
+                   "any folder of .json / .gtsp(.gz) files or one such file; its reference.csv "
+                   "gives the gaps (--instances: the first N per K; omegas are ignored for GTSPLIB)")
+    g.add_argument("--seeds", metavar="LIST",
+                   help="solver seeds, e.g. 0,1,2 or 0..4: one solve per seed (default: 0)")
+    g.add_argument("--update-reference", action="store_true",
+                   help="write a tour strictly better than a set's best_known value into its "
+                   "reference.csv (atomically, with the solver and date); a proven optimum is "
+                   "never changed, and a tour below it is an error")
     g = p.add_argument_group("the paper's experiments only")
     g.add_argument("--experiments", "-e", default=None, metavar="LIST",
                    help="comma-separated experiments, or 'all' (default)")
@@ -481,7 +502,43 @@ def _given(args: argparse.Namespace, dests: Sequence[str]) -> list[str]:
     return [flag(d) for d in dests if getattr(args, d) is not None and getattr(args, d) is not False]
 
 
+#: ``bench`` options a sweep (``--set``) takes besides the shared ones (argparse dests).
+_SET_OPTIONS = ("omegas", "names", "max_nodes", "jobs", "instance_dir", "fresh", "retry_failed",
+                "no_progress", "seeds", "update_reference")
+_SET_ONLY = ("seeds", "update_reference")
+
+
+def _cmd_sets(args: argparse.Namespace) -> int:
+    for other in ("suite", "experiments"):
+        if getattr(args, other):
+            raise InputError(f"--set runs a sweep of its own: it cannot be combined with --{other}")
+    stray = _given(args, [d for d in (*_PAPER_ONLY, *_SUITE_ONLY) if d not in _SET_OPTIONS]
+                   + ["seed", "quick"])
+    if stray:
+        raise InputError(f"{stray[0]} is not an option of --set (see gtsp-bench bench --help)")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from gtsp_bench.sweep import make_sweep_config, run_sweep
+
+    config = make_sweep_config(
+        sets=args.sets, solvers=args.solvers, omegas=args.omegas, seeds=args.seeds,
+        time_limit=args.time_limit, n_instances=args.instances, names=args.names,
+        max_nodes=args.max_nodes, ks=args.clusters, jobs=args.jobs, out_dir=args.out,
+        instance_dir=args.instance_dir, fresh=args.fresh, retry_failed=args.retry_failed,
+        progress=not args.no_progress, update_reference=args.update_reference,
+    )
+    summary = run_sweep(config)
+    _say(summary.table.rstrip("\n"))
+    return 1 if summary.failed or summary.below_optimum else 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
+    if args.sets:
+        return _cmd_sets(args)
+    stray = _given(args, _SET_ONLY)
+    if stray:
+        raise InputError(f"{stray[0]} is an option of --set (a sweep over instance sets)")
     if args.suite:
         return _cmd_suite(args)
     stray = _given(args, _SUITE_ONLY)

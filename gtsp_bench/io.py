@@ -66,6 +66,17 @@ def _read_text(path: Path) -> str:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
 
 
+def read_text(path: str | os.PathLike[str]) -> str:
+    """The UTF-8 text of a file, gunzipped if its name ends in ``.gz``.
+
+    Raises
+    ------
+    InputError
+        ``"<path>: <problem>"`` for a missing, unreadable, non-UTF-8 or bad gzip file.
+    """
+    return _read_text(Path(path))
+
+
 def _gunzip(path: Path, data: bytes) -> bytes:
     try:
         return gzip.decompress(data)

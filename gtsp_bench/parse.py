@@ -117,6 +117,14 @@ def parse_json_instance(text: str, default_name: str = "instance") -> Instance:
     return instance_from_dict(_strict_json(text), default_name)
 
 
+def parse_instance_text(text: str, default_name: str = "instance") -> Instance:
+    """Parse the text of an instance file of either format: a JSON object (UAV) when its first
+    non-blank character is ``{``, else GTSPLIB (:func:`parse_gtsp`)."""
+    if text.lstrip().startswith("{"):
+        return parse_json_instance(text, default_name)
+    return parse_gtsp(text)
+
+
 def instance_to_dict(instance: Instance) -> dict[str, Any]:
     """The JSON object of a UAV instance (energy parameters: only the overrides)."""
     if instance.params is None:

@@ -78,19 +78,19 @@ def _limit_threads() -> None:
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
     """Solve one task message ``{fingerprint, text, omega, seed, time_limit}`` through the harness.
 
-    The instance JSON is parsed once per fingerprint. An :class:`InputError` becomes a
-    ``refused`` record, a :class:`MemoryError` a ``failed`` one with cause ``infrastructure``, any
-    other exception a ``failed`` one with cause ``solver``.
+    The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint. An
+    :class:`InputError` becomes a ``refused`` record, a :class:`MemoryError` a ``failed`` one with
+    cause ``infrastructure``, any other exception a ``failed`` one with cause ``solver``.
     """
     from gtsp_bench.errors import InputError
-    from gtsp_bench.parse import parse_json_instance
+    from gtsp_bench.parse import parse_instance_text
     from gtsp_bench.registry import run_solver
 
     start = time.perf_counter()
     try:
         inst = cache.get(msg["fingerprint"])
         if inst is None:
-            inst = cache[msg["fingerprint"]] = parse_json_instance(msg["text"])
+            inst = cache[msg["fingerprint"]] = parse_instance_text(msg["text"])
         _limit_threads()
         res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
                          seed=msg["seed"], name=name)
