@@ -377,10 +377,10 @@ def run_sweep(config: SweepConfig, *, log: Callable[[str], None] | None = None) 
     its outputs and, with ``config.update_reference``, the improved references."""
     say = log or (lambda msg: print(msg, file=sys.stderr))
     t0 = time.perf_counter()
+    loaded = load_sets(config)  # a bad set or file fails before anything is written
     task_log = TaskLog(config.log_path)
-    task_log.open()  # an output folder that cannot be written fails here, before any work
+    task_log.open()  # an output folder that cannot be written fails here, before any solve
     task_log.close()
-    loaded = load_sets(config)
     cells, tasks = plan_sweep(config, loaded)
     summary = SweepSummary(tasks=len(tasks))
     records = task_log.load({k: tuple(int(n) for n in t.instance.instance.sizes) for k, t in tasks.items()})

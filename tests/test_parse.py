@@ -426,3 +426,17 @@ def test_fuzz_mutated_gtsplib_text_loads_or_is_an_input_error(data):
 def test_fuzz_any_text_is_gtsplib_or_an_input_error(text):
     """Arbitrary text: a .gtsp instance, or InputError."""
     _loads_or_input_error(parse_gtsp, text)
+
+
+def test_parse_instance_text_tells_the_formats_apart(tiny):
+    """JSON text (first non-blank character '{') is a UAV instance, anything else GTSPLIB."""
+    from gtsp_bench.instance import Instance
+    from gtsp_bench.parse import parse_instance_text
+
+    uav = parse_instance_text("\n  " + format_json_instance(tiny))
+    assert uav.is_uav and uav.name == "tiny"
+    flat = Instance("flat", tiny.clusters, params=None, edge_weight_type="EUC_2D")
+    back = parse_instance_text(format_gtsp(flat))
+    assert not back.is_uav and back.n_clusters == 2 and back.name == "flat"
+    with pytest.raises(InputError):
+        parse_instance_text("NAME : x\nTYPE : TSP\n")
