@@ -9,7 +9,7 @@ K      ?= 4..10
 BENCH_ARGS ?=
 SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl bench-sets clean
 
 install: $(STAMP)
 
@@ -47,6 +47,13 @@ bench-heuristics: $(STAMP)
 
 bench-drl: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+# A sweep over instance sets (gtsp-bench bench --set; outputs in benchmarks/out/sets): SET names
+# the set (gtsplib, a folder under instances/, a path), SET_ARGS passes more options.
+SET ?= gtsplib
+SET_ARGS ?=
+bench-sets: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench --set $(SET) $(SET_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info

@@ -9,7 +9,7 @@ A set's reference values live in ``reference.csv`` beside its files, one row per
 omega::
 
     instance,omega,value,lower_bound,status,source,date
-    uav-K50-N20-s1-000,0.5,48123.25,47990.5,best_known,lns 30s seed 0,2026-11-23
+    my-set-000,0.5,48123.25,47990.5,best_known,lns 30s seed 0,2026-11-23
 
 ``instance`` is the file's stem (its name without ``.json`` / ``.gtsp`` / ``.gz``); ``omega`` is
 empty for a distance-only (GTSPLIB) instance; ``value`` is the objective and ``lower_bound``
