@@ -65,6 +65,10 @@ DEFAULT_TIME_LIMIT = 10.0
 DISTANCE_OMEGA = 0.0
 #: A gap at most this (in percent) is a hit of the reference.
 HIT_GAP_PCT = 1e-6
+#: Notes of a row whose tour is below its reference: an error for a proven optimum, an
+#: improvement for a best known value.
+BELOW_OPTIMUM = "below the proven optimum"
+BETTER_THAN_BEST_KNOWN = "better than the best known"
 #: Columns of ``sweep.csv``, in order.
 TIDY_COLUMNS = (
     "set", "instance", "K", "N", "omega", "solver", "seed", "time_limit", "status", "objective",
@@ -219,9 +223,15 @@ def load_sets(config: SweepConfig) -> list[tuple[InstanceSet, list[Entry]]]:
     InputError
         A bad set or file, a name in ``names`` that no set holds, or a set left empty.
     """
-    out, found = [], set()
+    out, found, folders = [], set(), {}
     for arg in config.sets:
         s = resolve_set(arg, config.instance_dir)
+        if s.name in folders:
+            if folders[s.name] == s.folder.resolve():
+                continue  # the same set named twice
+            raise InputError(f"--set {arg}: another set is also named {s.name!r} ({folders[s.name]}); "
+                             "rename one of the folders")
+        folders[s.name] = s.folder.resolve()
         files = [f for f in s.files if config.names is None or f.stem in config.names]
         if config.max_nodes is not None:
             files = [f for f in files if f.nodes is None or f.nodes <= config.max_nodes]
@@ -285,8 +295,7 @@ def sweep_rows(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[Ent
         if ref is not None and math.isfinite(obj):
             gap = 100.0 * (obj - ref.value) / abs(ref.value) if ref.value else math.nan
             if strictly_better(obj, ref.value):
-                notes.append("below the proven optimum" if ref.status == "optimal"
-                             else "better than the best known")
+                notes.append(BELOW_OPTIMUM if ref.status == "optimal" else BETTER_THAN_BEST_KNOWN)
         rows.append({
             "set": c.entry.set_name, "instance": c.entry.stem, "K": c.entry.k, "N": c.entry.n,
             "omega": c.omega, "solver": c.solver, "seed": c.seed, "time_limit": config.time_limit,
@@ -395,12 +404,16 @@ def run_sweep(config: SweepConfig, *, log: Callable[[str], None] | None = None) 
         from tqdm import tqdm
 
         bar = tqdm(total=len(todo), unit="solve", disable=not config.progress, dynamic_ncols=True)
+        unlogged: set[str] = set()
 
         def on_record(task: Task, rec: dict[str, Any], persist: bool) -> None:
             full = {"key": task.key, "instance": task.instance.instance.name, "solver": task.solver,
                     "omega": task.omega, "seed": task.seed, "time_limit": task.time_limit, **rec}
             if persist:
                 task_log.append(full)
+            elif task.solver not in unlogged:
+                unlogged.add(task.solver)
+                say(f"warning: {task.solver}: {rec.get('note')} (not recorded: a rerun retries it)")
             records[task.key] = full
             summary.run += 1
             bar.update()
@@ -433,13 +446,13 @@ def _references(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[En
                 df: pd.DataFrame, summary: SweepSummary, say: Callable[[str], None]) -> None:
     """Report tours below a proven optimum (errors) and better than a best known value; write
     the latter into the sets' ``reference.csv`` when asked."""
-    below = df[df["note"].str.contains("below the proven optimum", regex=False)]
+    below = df[df["note"].str.contains(BELOW_OPTIMUM, regex=False)]
     for r in below.itertuples():
         say(f"error: {r.set}/{r.instance}: {r.solver} seed {r.seed} found {r.objective!r}, below the "
             f"proven optimum {r.reference_value!r} ({r.reference_source}): the reference or the "
             "solver is wrong")
     summary.below_optimum = len(below)
-    better = df[df["note"].str.contains("better than the best known", regex=False)]
+    better = df[df["note"].str.contains(BETTER_THAN_BEST_KNOWN, regex=False)]
     by_set: dict[str, list[Improvement]] = {}
     for r in better.itertuples():
         omega = None if pd.isna(r.omega) else float(r.omega)

@@ -65,6 +65,12 @@ def test_plan_counts_omegas_and_seeds_and_ignores_omega_for_gtsplib(tmp_path):
         load_sets(make_sweep_config(sets=[str(folder)], solvers="greedy", names="tiny-000,nope"))
     with pytest.raises(InputError, match="has no instance left"):
         load_sets(make_sweep_config(sets=[str(folder)], solvers="greedy", ks="9"))
+    twice = make_sweep_config(sets=[str(folder), str(folder) + "/", str(tmp_path / "." / "tiny")],
+                              solvers="greedy")
+    assert len(load_sets(twice)) == 1
+    _folder(tmp_path / "other")
+    with pytest.raises(InputError, match="another set is also named 'tiny'"):
+        load_sets(make_sweep_config(sets=[str(folder), str(tmp_path / "other" / "tiny")], solvers="greedy"))
     with pytest.raises(InputError, match="unknown solver 'nosuch'"):
         make_sweep_config(sets=[str(folder)], solvers="greedy,nosuch")
 
