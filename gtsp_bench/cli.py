@@ -265,7 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write a tour strictly better than a set's best_known value into its "
                    "reference.csv (atomically, with the solver and date); a proven optimum is "
                    "never changed, and a tour below it is an error")
-    g = p.add_argument_group("the paper's experiments only")
+    g = p.add_argument_group("the paper's experiments only (--set takes some, see below)")
     g.add_argument("--experiments", "-e", default=None, metavar="LIST",
                    help="comma-separated experiments, or 'all' (default)")
     g.add_argument("--reference", metavar="NAME", default=None,
@@ -286,7 +286,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--report-only", action="store_true",
                    help="only refresh OUT/README.md from the CSV files")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
-    g = p.add_argument_group("suites only (--suite); each takes some, see below")
+    g = p.add_argument_group("suites only (--suite); each takes some, and --set some, see below")
     g.add_argument("--omegas", metavar="LIST",
                    help="omegas, e.g. 0,0.5,0.9 (exact: default 0,0.5,0.9, quick 0.5; heuristics: "
                    "one, default 0.5)")
@@ -515,7 +515,9 @@ def _cmd_sets(args: argparse.Namespace) -> int:
     stray = _given(args, [d for d in (*_PAPER_ONLY, *_SUITE_ONLY) if d not in _SET_OPTIONS]
                    + ["seed", "quick"])
     if stray:
-        raise InputError(f"{stray[0]} is not an option of --set (see gtsp-bench bench --help)")
+        hint = "the solver seeds are --seeds" if stray[0] in ("--seed", "--solver-seed") \
+            else "see gtsp-bench bench --help"
+        raise InputError(f"{stray[0]} is not an option of --set ({hint})")
     import matplotlib
 
     matplotlib.use("Agg")
