@@ -239,6 +239,9 @@ def load_sets(config: SweepConfig) -> list[tuple[InstanceSet, list[Entry]]]:
             files = [f for f in files if f.clusters is None or f.clusters in config.ks]
         entries, per_k = [], {}
         for f in files:
+            full = config.n_instances is not None and per_k.get(f.clusters, 0) >= config.n_instances
+            if f.clusters is not None and full:
+                continue  # its K has its instances: not read
             inst, text, digest = read_set_file(f)
             k = inst.n_clusters
             if (config.ks is not None and k not in config.ks) or (

@@ -65,6 +65,8 @@ def test_plan_counts_omegas_and_seeds_and_ignores_omega_for_gtsplib(tmp_path):
         load_sets(make_sweep_config(sets=[str(folder)], solvers="greedy", names="tiny-000,nope"))
     with pytest.raises(InputError, match="has no instance left"):
         load_sets(make_sweep_config(sets=[str(folder)], solvers="greedy", ks="9"))
+    lib = make_sweep_config(sets=["gtsplib"], solvers="greedy", n_instances=1, max_nodes=30)
+    assert [e.stem for e in load_sets(lib)[0][1]] == ["3burma14", "4ulysses16", "5gr21", "6fri26"]
     twice = make_sweep_config(sets=[str(folder), str(folder) + "/", str(tmp_path / "." / "tiny")],
                               solvers="greedy")
     assert len(load_sets(twice)) == 1
