@@ -348,6 +348,32 @@ def test_damaged_log_records_are_redone_and_give_the_same_csv(tmp_path, capsys):
     pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
 
 
+@pytest.mark.parametrize("ending", ["\n", ""])
+def test_a_cut_last_record_is_redone_with_a_warning(tmp_path, capsys, ending):
+    """The log's last record cut mid-write, with or without a newline after it: the run exits 0,
+    redoes exactly that solve (with a warning naming the line when it is a whole line) and writes
+    the same table; the record it appends starts on a line of its own."""
+    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "2",
+            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    csv = tmp_path / "out" / "ratio-k.csv"
+    clean = _csv_without_runtimes(csv)
+    log = tmp_path / "out" / "tmp" / "runs.jsonl"
+    lines = log.read_text().splitlines()
+    log.write_text("\n".join([*lines[:-1], lines[-1][: len(lines[-1]) // 2]]) + ending)
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "1 solves run, 3 re-used" in err
+    warned = [line for line in err.splitlines() if line.startswith("warning: ")]
+    assert warned == ([f"warning: {log}:{len(lines)}: not a JSON record; skipped, its solve is redone"]
+                      if ending else [])
+    after = log.read_text().splitlines()
+    assert after[: len(lines) - 1] == lines[:-1]
+    assert json.loads(after[-1])["key"] == json.loads(lines[-1])["key"]
+    pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
+
+
 def test_a_killed_worker_is_retried_by_the_next_run(tmp_path, capsys, monkeypatch):
     """A worker killed from outside under every attempt of a solve: that row is recorded failed
     (cause infrastructure) and bench exits 1 saying so; the next run solves it again, with 0
