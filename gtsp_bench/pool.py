@@ -5,7 +5,9 @@ wrapped in a :class:`multiprocessing.connection.Connection`. It imports only thi
 harness and its one solver, never the caller's ``__main__``: start-up costs the same from the CLI,
 a script or pytest, and solvers whose libraries cannot share a process (highspy and ortools) never
 meet. A worker builds its solver once, then solves the tasks it is sent one at a time; the runner
-kills a worker whose solve exceeds the hard limit and starts another.
+kills a worker whose solve exceeds the hard limit and starts another. :func:`run_jobs` uses a
+:class:`WorkerPool` once; the Dask executors (:mod:`gtsp_bench.executors`) keep one on each Dask
+worker thread, so that its worker process serves that thread's next solve of the same solver.
 
 Runtimes come from :func:`gtsp_bench.registry.run_solver` inside the worker (the solver's own
 ``solve`` call), so process start-up and instance parsing are never counted.

@@ -395,7 +395,9 @@ def run_solver_tasks(
     """Run one solver's tasks, each in a fresh worker process with the hard limit
     (:func:`gtsp_bench.pool.run_jobs`): ``jobs`` of them on this machine (``executor`` ``local``),
     or on Dask workers (``dask``: ``jobs`` local Dask workers; ``tcp://HOST:PORT``: a scheduler's
-    workers; see :mod:`gtsp_bench.executors`). ``on_record`` gets each result as it arrives."""
+    workers; see :mod:`gtsp_bench.executors`). ``on_record`` gets each result as it arrives. A
+    Dask executor stays open for the next call (one cluster for all phases of a run) until
+    :func:`gtsp_bench.executors.close_executors`, which :func:`run_bench` calls at its end."""
     from gtsp_bench.executors import open_executor
     from gtsp_bench.registry import solver_specs
 
