@@ -24,7 +24,8 @@ JSON line each to ``<out>/tmp/runs.jsonl`` (flushed and fsynced; a torn last lin
 interrupted run resumes without redoing anything and experiments share their solves (``runtime``
 re-uses ``ratio-k``). Tasks run solver by solver, each solver in fresh worker processes
 (``forkserver``): highspy and ortools never meet in one process, and a worker that hangs past the
-hard limit is killed without stopping the run. A solver that raises gives a row with status
+hard limit is killed without stopping the run (``executor``: the same workers on Dask, see
+:mod:`gtsp_bench.executors`). A solver that raises gives a row with status
 ``failed`` (cause ``solver``), one that refuses its input by design (an ``InputError``: dp above its
 memory limit, drl on N != 20) ``refused``, one killed at the hard limit ``time_limit`` without an
 answer. A worker that dies under a solve (the OOM killer, ``kill -9``) or a solve that runs out of
@@ -209,9 +210,8 @@ def make_config(
     ``retry_failed`` redoes solves the log records as failed by the solver's own error (those
     whose cause was the infrastructure are retried anyway). ``executor`` is where the solves run:
     ``local``, ``dask`` or ``tcp://HOST:PORT`` (:mod:`gtsp_bench.executors`). ``quick`` changes
-    the defaults only
-    (K = 4, 5; 3 instances; omega 0, .5, .9; output in
-    ``results/quick``); explicit values win.
+    the defaults only (K = 4, 5; 3 instances; omega 0, .5, .9; output in ``results/quick``);
+    explicit values win.
 
     Raises
     ------
@@ -392,7 +392,7 @@ def run_solver_tasks(
     solver: str, tasks: Sequence[Task], jobs: int, hard_limit: float,
     on_record: Callable[[Task, dict[str, Any], bool], None], *, executor: str = "local",
 ) -> PhaseStats:
-    """Run one solver's tasks, each in a fresh worker process with the hard limit
+    """Run one solver's tasks in the pool's worker processes, with its hard limit
     (:func:`gtsp_bench.pool.run_jobs`): ``jobs`` of them on this machine (``executor`` ``local``),
     or on Dask workers (``dask``: ``jobs`` local Dask workers; ``tcp://HOST:PORT``: a scheduler's
     workers; see :mod:`gtsp_bench.executors`). ``on_record`` gets each result as it arrives. A
