@@ -302,15 +302,15 @@ def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
 
 
 def test_unwritable_output_folder_fails_before_any_work(tmp_path, capsys):
-    """An --out that is a file: one error line naming the log path, exit 2, no instance written
-    (it used to be a traceback after the first solve)."""
+    """An --out that is a file: one error line naming the first file the run makes there (its
+    lock), exit 2, no instance written (it used to be a traceback after the first solve)."""
     blocker = tmp_path / "out"
     blocker.write_text("not a folder")
     code = main(["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "1",
                  "--nodes", "4", *_dirs(tmp_path)])
     err = capsys.readouterr().err
     assert code == 2
-    assert err == f"gtsp-bench: error: {blocker}/tmp/runs.jsonl: cannot write (Not a directory)\n"
+    assert err == f"gtsp-bench: error: {blocker}/tmp/bench.lock: cannot write (Not a directory)\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
