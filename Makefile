@@ -16,7 +16,7 @@ install: $(STAMP)
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
-		-c constraints.txt -e '.[dev,gurobi,pyvrp,lkh]'
+		-c constraints.txt -e '.[dev,gurobi,pyvrp,lkh,dask]'
 	touch $(STAMP)
 
 test: $(STAMP)

@@ -166,6 +166,40 @@ def parse_omegas(text: object) -> tuple[float, ...]:
     return tuple(out)
 
 
+
+#: The executors :func:`check_executor` accepts besides a scheduler address.
+EXECUTORS = ("local", "dask")
+
+
+def check_executor(text: object) -> str:
+    """Where the runner's solves run: ``local`` (this machine's worker pool), ``dask`` (a Dask
+    cluster on this machine) or ``tcp://HOST:PORT`` (an existing Dask scheduler), returned as
+    given (the address without surrounding spaces).
+
+    Raises
+    ------
+    InputError
+        Anything else, or an address without a host or with a bad port.
+    """
+    from urllib.parse import urlsplit
+
+    value = str(text).strip()
+    if value in EXECUTORS:
+        return value
+    expected = f"expected {', '.join(EXECUTORS)} or a Dask scheduler's tcp://HOST:PORT"
+    if not value.startswith("tcp://"):
+        raise InputError(f"bad executor {text!r} ({expected})")
+    try:
+        parts = urlsplit(value)
+        port = parts.port
+    except ValueError:
+        port = None
+        parts = None
+    if parts is None or not parts.hostname or port is None or port < 1 or parts.path or parts.query:
+        raise InputError(f"bad executor {text!r}: a Dask scheduler's address is tcp://HOST:PORT "
+                         f"with a port 1..65535")
+    return value
+
 # ---------------------------------------------------------------------- numbers of an instance
 #: Largest coordinate magnitude accepted: its ulp (about 1.2e-7) stays far below the millimetre of
 #: a UAV file and the unit rounding of the TSPLIB rules, and squared distances cannot overflow.

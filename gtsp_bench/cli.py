@@ -274,6 +274,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="nodes per cluster (default: 20)")
     g.add_argument("--jobs", "-j", type=_int, metavar="J",
                    help="worker processes (default: the number of cores)")
+    g.add_argument("--executor", metavar="WHERE", default=None,
+                   help="where solves run: 'local' (default: this machine's worker pool), 'dask' "
+                   "(a Dask cluster of --jobs workers on this machine) or tcp://HOST:PORT (an "
+                   "existing Dask scheduler and its workers; see docs/distributed.md)")
     g.add_argument("--instance-dir", default=None, metavar="DIR",
                    help="where instance sets are kept (default: instances)")
     g.add_argument("--checkpoints", default=None, metavar="DIR",
@@ -491,7 +495,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 #: ``bench`` options of the paper's experiments only, and of the suites only (argparse dests).
 _PAPER_ONLY = ("experiments", "reference", "nodes", "jobs", "instance_dir", "checkpoints", "fresh",
-               "retry_failed", "report_only", "no_progress")
+               "retry_failed", "report_only", "no_progress", "executor")
 _SUITE_ONLY = ("omegas", "solver_seed", "dp_max_k", "exact", "exact_time_limit", "gtsplib", "names",
                "max_nodes", "no_gtsplib", "no_generated", "repeats", "cache")
 
@@ -555,7 +559,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     # Options left out (None: shared with the suites, whose defaults differ) take make_config's.
     given = {"experiments": args.experiments, "reference": args.reference, "n_nodes": args.nodes,
-             "seed": args.seed, "time_limit": args.time_limit, "instance_dir": args.instance_dir}
+             "seed": args.seed, "time_limit": args.time_limit, "instance_dir": args.instance_dir,
+             "executor": args.executor}
     config = make_config(
         ks=args.clusters, solvers=args.solvers, n_instances=args.instances, jobs=args.jobs,
         quick=args.quick, out_dir=args.out, checkpoint_dir=args.checkpoints, fresh=args.fresh,

@@ -5,7 +5,9 @@ wrapped in a :class:`multiprocessing.connection.Connection`. It imports only thi
 harness and its one solver, never the caller's ``__main__``: start-up costs the same from the CLI,
 a script or pytest, and solvers whose libraries cannot share a process (highspy and ortools) never
 meet. A worker builds its solver once, then solves the tasks it is sent one at a time; the runner
-kills a worker whose solve exceeds the hard limit and starts another.
+kills a worker whose solve exceeds the hard limit and starts another. :func:`run_jobs` uses a
+:class:`WorkerPool` once; the Dask executors (:mod:`gtsp_bench.executors`) keep one on each Dask
+worker thread, so that its worker process serves that thread's next solve of the same solver.
 
 Runtimes come from :func:`gtsp_bench.registry.run_solver` inside the worker (the solver's own
 ``solve`` call), so process start-up and instance parsing are never counted.
@@ -209,6 +211,130 @@ class PhaseStats:
     workers: int = 0
 
 
+class WorkerPool:
+    """Worker processes of one solver, kept between calls of :meth:`run` (at most
+    ``n_workers``); :func:`run_jobs` is one pool used once. Close it (or use it as a context
+    manager) to stop its workers."""
+
+    def __init__(self, solver: str, target: str | None, description: str, n_workers: int) -> None:
+        self.solver, self.target, self.description = solver, target, description
+        self.n_workers = n_workers
+        self.workers: list[_Worker] = []
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop every worker."""
+        while self.workers:
+            w = self.workers.pop()
+            _stop_worker(w, kill=w.job is not None)
+
+    def _start(self) -> None:
+        self.workers.append(_start_worker(self.solver, self.target, self.description))
+
+    def run(self, jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], hard_limit: float,
+            on_result: Callable[[Hashable, dict[str, Any], bool], None]) -> PhaseStats:
+        """Solve ``jobs`` as :func:`run_jobs` does, with the pool's workers (started as needed,
+        idle ones kept for the next call; a worker still solving when this returns by an
+        exception is killed)."""
+        stats = PhaseStats(self.solver, workers=min(self.n_workers, len(jobs)))
+        if not jobs:
+            return stats
+        start = time.perf_counter()
+        pending = deque(jobs)
+        messages = dict(jobs)
+        attempts: dict[Hashable, int] = {}
+        workers = self.workers
+        while len(workers) < stats.workers:
+            self._start()
+
+        def retry(job: Hashable) -> bool:
+            """Queue ``job`` again (first in line) unless it has had its attempts."""
+            attempts[job] = attempts.get(job, 1) + 1
+            if attempts[job] > MAX_ATTEMPTS:
+                return False
+            pending.appendleft((job, messages[job]))
+            return True
+
+        def fail_all(note: str) -> None:
+            for job in [*(j for j, _ in pending), *(w.job for w in workers if w.job is not None)]:
+                on_result(job, failure(note), False)
+            pending.clear()
+            for w in workers:
+                w.job = None
+
+        def dispatch(w: _Worker) -> None:
+            if w.ready and w.job is None and pending:
+                w.job, msg = pending.popleft()
+                w.started = time.monotonic()
+                w.conn.send(msg)
+
+        try:
+            while workers and (pending or any(w.job is not None for w in workers)):
+                for w in workers:
+                    dispatch(w)
+                wait([w.conn for w in workers], timeout=0.5)
+                now = time.monotonic()
+                for w in list(workers):
+                    reply: tuple[str, Any] | None = ("dead", None)
+                    try:
+                        if w.conn.poll():
+                            reply = w.conn.recv()
+                        elif w.proc.poll() is None:
+                            reply = None
+                    except (EOFError, OSError):
+                        pass
+                    if reply is None:
+                        over = w.job is not None and now - w.started > hard_limit
+                        stuck = not w.ready and now - w.born > INIT_TIMEOUT_S
+                        if not (over or stuck):
+                            continue
+                        reply = ("killed", None) if over else ("stuck", None)
+                    kind, payload = reply
+                    if kind == "ready":
+                        w.ready = True
+                        continue
+                    if kind == "done":
+                        job, w.job = w.job, None
+                        if payload.get("cause") == INFRASTRUCTURE and retry(job):
+                            _stop_worker(w, kill=True)  # out of memory: start clean
+                            workers.remove(w)
+                            self._start()
+                            continue
+                        stats.solves += 1
+                        if math.isfinite(payload.get("runtime_s", math.nan)):
+                            stats.solver_s += payload["runtime_s"]
+                        dispatch(w)  # the next solve runs while the result is logged
+                        on_result(job, payload, True)
+                        continue
+                    _stop_worker(w, kill=True)  # unusable from here on
+                    workers.remove(w)
+                    if kind == "init_failed" or not w.ready:
+                        reason = payload if kind == "init_failed" else (
+                            "its worker timed out starting" if kind == "stuck"
+                            else f"its worker died (exit code {w.proc.returncode})")
+                        fail_all(f"solver could not be built: {reason}")
+                        return stats
+                    if w.job is not None and kind == "killed":
+                        on_result(w.job, failure(f"killed: no answer after {hard_limit:g} s",
+                                                 "time_limit"), True)
+                    elif w.job is not None and not retry(w.job):
+                        on_result(w.job, failure(f"worker died (exit code {w.proc.returncode}) in "
+                                                 f"{MAX_ATTEMPTS} attempts", cause=INFRASTRUCTURE), True)
+                    if pending:
+                        self._start()
+        finally:
+            for w in [w for w in workers if w.job is not None]:  # interrupted mid-solve
+                _stop_worker(w, kill=True)
+                workers.remove(w)
+            stats.wall_s = time.perf_counter() - start
+        return stats
+
+
 def run_jobs(
     solver: str, target: str | None, description: str,
     jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], n_workers: int, hard_limit: float,
@@ -232,92 +358,5 @@ def run_jobs(
         whose worker died under it, or that ran out of memory, is tried again in a fresh worker
         (at most :data:`MAX_ATTEMPTS` times in all) before its failure is reported.
     """
-    stats = PhaseStats(solver, workers=min(n_workers, len(jobs)))
-    if not jobs:
-        return stats
-    start = time.perf_counter()
-    pending = deque(jobs)
-    messages = dict(jobs)
-    attempts: dict[Hashable, int] = {}
-    workers = [_start_worker(solver, target, description) for _ in range(stats.workers)]
-
-    def retry(job: Hashable) -> bool:
-        """Queue ``job`` again (first in line) unless it has had its attempts."""
-        attempts[job] = attempts.get(job, 1) + 1
-        if attempts[job] > MAX_ATTEMPTS:
-            return False
-        pending.appendleft((job, messages[job]))
-        return True
-
-    def fail_all(note: str) -> None:
-        for job in [*(j for j, _ in pending), *(w.job for w in workers if w.job is not None)]:
-            on_result(job, failure(note), False)
-        pending.clear()
-        for w in workers:
-            w.job = None
-
-    def dispatch(w: _Worker) -> None:
-        if w.ready and w.job is None and pending:
-            w.job, msg = pending.popleft()
-            w.started = time.monotonic()
-            w.conn.send(msg)
-
-    try:
-        while workers and (pending or any(w.job is not None for w in workers)):
-            for w in workers:
-                dispatch(w)
-            wait([w.conn for w in workers], timeout=0.5)
-            now = time.monotonic()
-            for w in list(workers):
-                reply: tuple[str, Any] | None = ("dead", None)
-                try:
-                    if w.conn.poll():
-                        reply = w.conn.recv()
-                    elif w.proc.poll() is None:
-                        reply = None
-                except (EOFError, OSError):
-                    pass
-                if reply is None:
-                    over = w.job is not None and now - w.started > hard_limit
-                    stuck = not w.ready and now - w.born > INIT_TIMEOUT_S
-                    if not (over or stuck):
-                        continue
-                    reply = ("killed", None) if over else ("stuck", None)
-                kind, payload = reply
-                if kind == "ready":
-                    w.ready = True
-                    continue
-                if kind == "done":
-                    job, w.job = w.job, None
-                    if payload.get("cause") == INFRASTRUCTURE and retry(job):
-                        _stop_worker(w, kill=True)  # out of memory: start clean
-                        workers.remove(w)
-                        workers.append(_start_worker(solver, target, description))
-                        continue
-                    stats.solves += 1
-                    if math.isfinite(payload.get("runtime_s", math.nan)):
-                        stats.solver_s += payload["runtime_s"]
-                    dispatch(w)  # the next solve runs while the result is logged
-                    on_result(job, payload, True)
-                    continue
-                _stop_worker(w, kill=True)  # unusable from here on
-                workers.remove(w)
-                if kind == "init_failed" or not w.ready:
-                    reason = payload if kind == "init_failed" else (
-                        "its worker timed out starting" if kind == "stuck"
-                        else f"its worker died (exit code {w.proc.returncode})")
-                    fail_all(f"solver could not be built: {reason}")
-                    return stats
-                if w.job is not None and kind == "killed":
-                    on_result(w.job, failure(f"killed: no answer after {hard_limit:g} s",
-                                             "time_limit"), True)
-                elif w.job is not None and not retry(w.job):
-                    on_result(w.job, failure(f"worker died (exit code {w.proc.returncode}) in "
-                                             f"{MAX_ATTEMPTS} attempts", cause=INFRASTRUCTURE), True)
-                if pending:
-                    workers.append(_start_worker(solver, target, description))
-    finally:
-        for w in workers:
-            _stop_worker(w, kill=w.job is not None)
-        stats.wall_s = time.perf_counter() - start
-    return stats
+    with WorkerPool(solver, target, description, n_workers) as pool:
+        return pool.run(jobs, hard_limit, on_result)

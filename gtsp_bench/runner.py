@@ -24,7 +24,8 @@ JSON line each to ``<out>/tmp/runs.jsonl`` (flushed and fsynced; a torn last lin
 interrupted run resumes without redoing anything and experiments share their solves (``runtime``
 re-uses ``ratio-k``). Tasks run solver by solver, each solver in fresh worker processes
 (``forkserver``): highspy and ortools never meet in one process, and a worker that hangs past the
-hard limit is killed without stopping the run. A solver that raises gives a row with status
+hard limit is killed without stopping the run (``executor``: the same workers on Dask, see
+:mod:`gtsp_bench.executors`). A solver that raises gives a row with status
 ``failed`` (cause ``solver``), one that refuses its input by design (an ``InputError``: dp above its
 memory limit, drl on N != 20) ``refused``, one killed at the hard limit ``time_limit`` without an
 answer. A worker that dies under a solve (the OOM killer, ``kill -9``) or a solve that runs out of
@@ -59,13 +60,13 @@ from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_se
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import atomic_write_text, read_instance
 from gtsp_bench.parse import format_json_instance
-from gtsp_bench.pool import PhaseStats, run_jobs
+from gtsp_bench.pool import PhaseStats
 from gtsp_bench.report import (
     ks_text,
     read_training_logs,
     write_report,
 )
-from gtsp_bench.tasklog import TaskLog, has_answer, needs_run
+from gtsp_bench.tasklog import TaskLog, exclusive_lock, has_answer, needs_run
 
 EXPERIMENTS = ("ratio-omega", "ratio-k", "runtime", "trajectories", "training")
 #: The paper's cluster counts for the omega sweeps and the trajectory figures.
@@ -132,6 +133,7 @@ class BenchConfig:
     progress: bool = True
     retry_failed: bool = False
     omegas: tuple[float, ...] = OMEGAS
+    executor: str = "local"
 
     @property
     def omega_ks(self) -> tuple[int, ...]:
@@ -143,6 +145,11 @@ class BenchConfig:
     def log_path(self) -> Path:
         """The task log that makes runs resumable."""
         return self.out_dir / "tmp" / "runs.jsonl"
+
+    @property
+    def lock_path(self) -> Path:
+        """The lock a run holds on its output folder."""
+        return self.out_dir / "tmp" / "bench.lock"
 
     def hard_limit(self) -> float:
         """Seconds after which a worker's solve is killed."""
@@ -196,22 +203,25 @@ def make_config(
     fresh: bool = False,
     progress: bool = True,
     retry_failed: bool = False,
+    executor: str = "local",
 ) -> BenchConfig:
     """Validate every option before anything is written.
 
     ``retry_failed`` redoes solves the log records as failed by the solver's own error (those
-    whose cause was the infrastructure are retried anyway). ``quick`` changes the defaults only
-    (K = 4, 5; 3 instances; omega 0, .5, .9; output in
-    ``results/quick``); explicit values win.
+    whose cause was the infrastructure are retried anyway). ``executor`` is where the solves run:
+    ``local``, ``dask`` or ``tcp://HOST:PORT`` (:mod:`gtsp_bench.executors`). ``quick`` changes
+    the defaults only (K = 4, 5; 3 instances; omega 0, .5, .9; output in ``results/quick``);
+    explicit values win.
 
     Raises
     ------
     InputError
         A bad K, an unknown experiment, solver or reference, or a bad count or limit.
     """
-    from gtsp_bench.checks import check_int, check_seed, check_time_limit
+    from gtsp_bench.checks import check_executor, check_int, check_seed, check_time_limit
     from gtsp_bench.registry import solver_names, solver_specs
 
+    executor = check_executor(executor)
     registered = solver_names()
     if experiments in ("all", None):
         exps = EXPERIMENTS
@@ -250,7 +260,7 @@ def make_config(
         quick=quick, out_dir=Path(out_dir), instance_dir=Path(instance_dir),
         checkpoint_dir=Path(checkpoint_dir) if checkpoint_dir is not None else shipped_checkpoints(),
         fresh=fresh, progress=progress, retry_failed=retry_failed,
-        omegas=QUICK_OMEGAS if quick else OMEGAS,
+        omegas=QUICK_OMEGAS if quick else OMEGAS, executor=executor,
     )
 
 
@@ -380,16 +390,23 @@ def _task_message(t: Task) -> dict[str, Any]:
 
 def run_solver_tasks(
     solver: str, tasks: Sequence[Task], jobs: int, hard_limit: float,
-    on_record: Callable[[Task, dict[str, Any], bool], None],
+    on_record: Callable[[Task, dict[str, Any], bool], None], *, executor: str = "local",
 ) -> PhaseStats:
-    """Run one solver's tasks in ``jobs`` fresh worker processes (:func:`gtsp_bench.pool.run_jobs`)."""
+    """Run one solver's tasks in the pool's worker processes, with its hard limit
+    (:func:`gtsp_bench.pool.run_jobs`): ``jobs`` of them on this machine (``executor`` ``local``),
+    or on Dask workers (``dask``: ``jobs`` local Dask workers; ``tcp://HOST:PORT``: a scheduler's
+    workers; see :mod:`gtsp_bench.executors`). ``on_record`` gets each result as it arrives. A
+    Dask executor stays open for the next call (one cluster for all phases of a run) until
+    :func:`gtsp_bench.executors.close_executors`, which :func:`run_bench` calls at its end."""
+    from gtsp_bench.executors import open_executor
     from gtsp_bench.registry import solver_specs
 
     spec = next(s for s in solver_specs() if s.name == solver)
     target = spec.import_path()  # a solver registered by class is re-registered in the workers
     by_key = {t.key: t for t in tasks}
-    return run_jobs(solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks],
-                    jobs, hard_limit, lambda key, rec, persist: on_record(by_key[key], rec, persist))
+    return open_executor(executor, jobs).run(
+        solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks], hard_limit,
+        lambda key, rec, persist: on_record(by_key[key], rec, persist))
 
 
 # ---------------------------------------------------------------------- rows and tables
@@ -466,9 +483,21 @@ class RunSummary:
 def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) -> RunSummary:
     """Run the configured experiments; write their CSV and PNG files and refresh the report.
 
-    Finished solves found in the task log are not redone (unless ``config.fresh``).
+    Finished solves found in the task log are not redone (unless ``config.fresh``). The run holds
+    :attr:`BenchConfig.lock_path` throughout: a second run on the same output folder stops at
+    once with an :class:`InputError` naming the lock.
     """
+    from gtsp_bench.executors import close_executors
+
     say = log or (lambda msg: print(msg, file=sys.stderr))
+    with exclusive_lock(config.lock_path, "another gtsp-bench bench"):
+        try:
+            return _run_bench(config, say)
+        finally:
+            close_executors()
+
+
+def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
     t0 = time.perf_counter()
     task_log = TaskLog(config.log_path)
     task_log.open()  # an output folder that cannot be written fails here, before any work
@@ -491,8 +520,11 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
             f"records skipped")
     todo = [t for t in tasks.values() if config.fresh or needs_run(records.get(t.key), config.retry_failed)]
     summary.tasks, summary.cached = len(tasks), len(tasks) - len(todo)
+    where = f"{config.jobs} worker(s)" if config.executor == "local" else (
+        f"{config.jobs} local Dask worker(s)" if config.executor == "dask"
+        else f"the Dask scheduler {config.executor}")
     say(f"{len(tasks)} solves, {summary.cached} already in {config.log_path}, {len(todo)} to run "
-        f"with {config.jobs} worker(s), time limit {config.time_limit:g} s")
+        f"with {where}, time limit {config.time_limit:g} s")
     transient: dict[str, dict[str, Any]] = {}
     if todo:
         from tqdm import tqdm
@@ -517,7 +549,8 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
                 if mine:
                     bar.set_description(solver)
                     summary.phases.append(run_solver_tasks(
-                        solver, mine, config.jobs, config.hard_limit(), on_record))
+                        solver, mine, config.jobs, config.hard_limit(), on_record,
+                        executor=config.executor))
         finally:
             bar.close()
             task_log.close()

@@ -1,13 +1,15 @@
 """The runner's task log: one JSON record per finished solve, appended durably, read back with
-every record checked, and the rules for which logged solves a run redoes."""
+every record checked, and the rules for which logged solves a run redoes; and the lock that keeps
+two runs out of one output folder."""
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +28,7 @@ class TaskLog:
     def __init__(self, path: Path) -> None:
         self.path = path
         self._file: io.TextIOWrapper | None = None
+        self._checked_end = False
         self.skipped: list[str] = []
 
     def load(self, sizes: Mapping[str, Sequence[int]] | None = None) -> dict[str, dict[str, Any]]:
@@ -81,6 +84,7 @@ class TaskLog:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (closed in close())
+                self._checked_end = False
             except OSError as e:
                 raise InputError(f"{self.path}: cannot write ({e.strerror})") from None
 
@@ -88,7 +92,12 @@ class TaskLog:
         """Append one record durably."""
         self.open()
         assert self._file is not None
-        self._file.write(json.dumps(record, allow_nan=True) + "\n")
+        line = json.dumps(record, allow_nan=True) + "\n"
+        if not self._checked_end:  # a torn last line that load() did not cut: never glue onto it
+            self._checked_end = True
+            if self._file.tell() > 0 and not _ends_with_newline(self.path):
+                line = "\n" + line
+        self._file.write(line)
         self._file.flush()
         os.fsync(self._file.fileno())
 
@@ -97,6 +106,46 @@ class TaskLog:
         if self._file is not None:
             self._file.close()
             self._file = None
+
+
+def _ends_with_newline(path: Path) -> bool:
+    with open(path, "rb") as f:
+        f.seek(-1, os.SEEK_END)
+        return f.read(1) == b"\n"
+
+
+@contextlib.contextmanager
+def exclusive_lock(path: Path, holder: str) -> Iterator[Path]:
+    """Hold an exclusive lock on the file ``path`` (made if missing) for the ``with`` block.
+
+    The lock is an ``flock`` the kernel drops when its process ends, however it ends, so a run
+    killed with SIGKILL leaves no stale lock behind. The file holds the holder's process id.
+
+    Raises
+    ------
+    InputError
+        At once, ``"<path>: locked by <holder> (process <pid>) ..."`` when another process holds
+        it, or ``"<path>: cannot write (...)"``.
+    """
+    import fcntl
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as e:
+        raise InputError(f"{path}: cannot write ({e.strerror})") from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            pid = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            raise InputError(f"{path}: locked by {holder} (process {pid}) using the same folder; "
+                             f"wait for it to finish or choose another output folder") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield path
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def has_answer(record: Mapping[str, Any]) -> bool:

@@ -84,6 +84,33 @@ class KilledFromOutside:
         return Greedy().solve(instance, omega)
 
 
+def set_env(name: str, value: str) -> None:
+    """Set an environment variable in this process (run on Dask workers started earlier)."""
+    import os
+
+    os.environ[name] = value
+
+
+class KillsItsDaskWorker:
+    """Like KilledFromOutside, but kills the process that started its worker: on a Dask worker,
+    that Dask worker (as a machine lost mid-task would be); greedy otherwise."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import os
+        import signal
+        from pathlib import Path
+
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
+
+        path = Path(os.environ[KILLS_FILE])
+        left = int(path.read_text())
+        if left > 0:
+            path.write_text(str(left - 1))
+            os.kill(os.getppid(), signal.SIGKILL)
+            time.sleep(1)  # never answers: its Dask worker is gone
+        return Greedy().solve(instance, omega)
+
+
 class OutOfMemory:
     """Raises MemoryError, as an allocation beyond the machine's memory does."""
 
@@ -158,10 +185,11 @@ class UsesTorch(_GreedyAfterImport):
 
 def register() -> None:
     """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-revised, t-highs,
-    t-ortools, t-torch, t-banner, t-killed, t-oom, t-refuses and t-missing (whose class does not
-    exist), all with ``bench=False``."""
+    t-ortools, t-torch, t-banner, t-killed, t-kills-dask, t-oom, t-refuses and t-missing (whose
+    class does not exist), all with ``bench=False``."""
     for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
                       ("t-banner", "Banner"), ("t-killed", "KilledFromOutside"),
+                      ("t-kills-dask", "KillsItsDaskWorker"),
                       ("t-oom", "OutOfMemory"), ("t-refuses", "Refuses"),
                       ("t-fixed", "FixedTour"), ("t-revised", "Revised"), ("t-highs", "UsesHighs"),
                       ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),

@@ -13,6 +13,7 @@ import pytest
 
 from gtsp_bench.checks import (
     MAX_TOUR_COST,
+    check_executor,
     check_finite_array,
     check_float,
     check_int,
@@ -99,6 +100,20 @@ def test_parse_omegas():
     for bad in ("0.5,x", "1.5", "", "nan", "0.5,"):
         with pytest.raises(InputError, match="bad omegas"):
             parse_omegas(bad)
+
+
+def test_check_executor():
+    """local, dask or a scheduler's tcp://HOST:PORT (spaces around it dropped); anything else,
+    an address without a host or a port, or with a bad port, is refused naming the forms."""
+    assert check_executor("local") == "local" and check_executor("dask") == "dask"
+    assert check_executor(" tcp://10.0.0.5:8786 ") == "tcp://10.0.0.5:8786"
+    assert check_executor("tcp://[::1]:8786") == "tcp://[::1]:8786"
+    with pytest.raises(InputError, match=r"bad executor 'spark' \(expected local, dask or a Dask"):
+        check_executor("spark")
+    for bad in ("tcp://host", "tcp://:8786", "tcp://host:0", "tcp://host:70000", "tcp://host:x",
+                "tcp://host:8786/path"):
+        with pytest.raises(InputError, match=r"a Dask scheduler's address is tcp://HOST:PORT"):
+            check_executor(bad)
 
 
 def test_check_finite_array_names_the_entry_and_the_kind():

@@ -302,15 +302,15 @@ def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
 
 
 def test_unwritable_output_folder_fails_before_any_work(tmp_path, capsys):
-    """An --out that is a file: one error line naming the log path, exit 2, no instance written
-    (it used to be a traceback after the first solve)."""
+    """An --out that is a file: one error line naming the first file the run makes there (its
+    lock), exit 2, no instance written (it used to be a traceback after the first solve)."""
     blocker = tmp_path / "out"
     blocker.write_text("not a folder")
     code = main(["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "1",
                  "--nodes", "4", *_dirs(tmp_path)])
     err = capsys.readouterr().err
     assert code == 2
-    assert err == f"gtsp-bench: error: {blocker}/tmp/runs.jsonl: cannot write (Not a directory)\n"
+    assert err == f"gtsp-bench: error: {blocker}/tmp/bench.lock: cannot write (Not a directory)\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
@@ -345,6 +345,32 @@ def test_damaged_log_records_are_redone_and_give_the_same_csv(tmp_path, capsys):
     assert len(warnings) == 3 and all(f"{log}:" in w for w in warnings), err
     assert f"{log}:1: 'key' is not a non-empty string" in err
     assert "2 solves run" in err and "0 failed" in err
+    pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
+
+
+@pytest.mark.parametrize("ending", ["\n", ""])
+def test_a_cut_last_record_is_redone_with_a_warning(tmp_path, capsys, ending):
+    """The log's last record cut mid-write, with or without a newline after it: the run exits 0,
+    redoes exactly that solve (with a warning naming the line when it is a whole line) and writes
+    the same table; the record it appends starts on a line of its own."""
+    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "2",
+            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    csv = tmp_path / "out" / "ratio-k.csv"
+    clean = _csv_without_runtimes(csv)
+    log = tmp_path / "out" / "tmp" / "runs.jsonl"
+    lines = log.read_text().splitlines()
+    log.write_text("\n".join([*lines[:-1], lines[-1][: len(lines[-1]) // 2]]) + ending)
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "1 solves run, 3 re-used" in err
+    warned = [line for line in err.splitlines() if line.startswith("warning: ")]
+    assert warned == ([f"warning: {log}:{len(lines)}: not a JSON record; skipped, its solve is redone"]
+                      if ending else [])
+    after = log.read_text().splitlines()
+    assert after[: len(lines) - 1] == lines[:-1]
+    assert json.loads(after[-1])["key"] == json.loads(lines[-1])["key"]
     pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
 
 

@@ -34,6 +34,39 @@ def test_task_log_drops_torn_line(tmp_path):
     assert log.skipped == []
 
 
+def test_an_append_never_glues_onto_a_torn_last_line(tmp_path):
+    """A log whose last line was torn (a run killed mid-write) and not cut by load(): the next
+    append starts a new line, so the torn line is skipped with a warning and the new record
+    kept."""
+    log = TaskLog(tmp_path / "runs.jsonl")
+    a, b = record("a"), record("b")
+    log.append(a)
+    log.close()
+    with open(log.path, "a") as f:
+        f.write('{"key": "c", "obj')
+    log.append(b)
+    log.append({**a, "objective": 8.0})
+    log.close()
+    assert log.path.read_text().splitlines()[1] == '{"key": "c", "obj'
+    records = log.load()
+    assert records == {a["key"]: {**a, "objective": 8.0}, b["key"]: b}
+    assert log.skipped == [f"{log.path}:2: not a JSON record"]
+
+
+@pytest.mark.parametrize("last", [b'{"key": "x", "objective": 1\n', b"\x00\x00\x00\n", b"\xff\xfe{]\n"])
+def test_a_corrupt_last_line_is_skipped_not_a_crash(tmp_path, last):
+    """A complete but corrupt last line (cut JSON, zero bytes a crash left, bytes that are not
+    UTF-8) is skipped and named; the records before it load."""
+    log = TaskLog(tmp_path / "runs.jsonl")
+    a = record("a")
+    log.append(a)
+    log.close()
+    with open(log.path, "ab") as f:
+        f.write(last)
+    assert log.load() == {a["key"]: a}
+    assert log.skipped == [f"{log.path}:2: not a JSON record"]
+
+
 @pytest.mark.parametrize("bad, reason", [
     ({"key": ["x"]}, "'key' is not a non-empty string"),
     ({**record("a"), "objective": "abc"}, "objective 'abc' of a feasible solve is not a finite"),
