@@ -68,6 +68,7 @@ suites (--suite NAME) and the options each takes besides -K, --solvers, --instan
   learned     --repeats --cache
 --set NAME|PATH (repeatable) takes -K --solvers --instances --time-limit --out --omegas --seeds
   --names --max-nodes --jobs --instance-dir --fresh --retry-failed --no-progress --update-reference
+  --executor
 
 examples:
   gtsp-bench bench -K 4..10                       # the paper's experiments into results/
@@ -508,7 +509,7 @@ def _given(args: argparse.Namespace, dests: Sequence[str]) -> list[str]:
 
 #: ``bench`` options a sweep (``--set``) takes besides the shared ones (argparse dests).
 _SET_OPTIONS = ("omegas", "names", "max_nodes", "jobs", "instance_dir", "fresh", "retry_failed",
-                "no_progress", "seeds", "update_reference")
+                "no_progress", "seeds", "update_reference", "executor")
 _SET_ONLY = ("seeds", "update_reference")
 
 
@@ -533,6 +534,7 @@ def _cmd_sets(args: argparse.Namespace) -> int:
         max_nodes=args.max_nodes, ks=args.clusters, jobs=args.jobs, out_dir=args.out,
         instance_dir=args.instance_dir, fresh=args.fresh, retry_failed=args.retry_failed,
         progress=not args.no_progress, update_reference=args.update_reference,
+        **({"executor": args.executor} if args.executor is not None else {}),
     )
     summary = run_sweep(config)
     _say(summary.table.rstrip("\n"))

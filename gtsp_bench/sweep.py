@@ -55,7 +55,7 @@ from gtsp_bench.sets import (
     strictly_better,
     update_reference,
 )
-from gtsp_bench.tasklog import TaskLog, needs_run
+from gtsp_bench.tasklog import TaskLog, exclusive_lock, needs_run
 
 DEFAULT_OUT = Path("benchmarks") / "out" / "sets"
 DEFAULT_OMEGAS = (0.5,)
@@ -98,11 +98,17 @@ class SweepConfig:
     retry_failed: bool = False
     progress: bool = True
     update_reference: bool = False
+    executor: str = "local"
 
     @property
     def log_path(self) -> Path:
         """The task log that makes sweeps resumable."""
         return self.out_dir / "tmp" / "runs.jsonl"
+
+    @property
+    def lock_path(self) -> Path:
+        """The lock a sweep holds on its output folder (the paper runner's, same place)."""
+        return self.out_dir / "tmp" / "bench.lock"
 
     def hard_limit(self) -> float:
         """Seconds after which a worker's solve is killed (as the paper's runner)."""
@@ -140,6 +146,7 @@ def make_sweep_config(
     ks: str | None = None, jobs: int | None = None, out_dir: str | os.PathLike[str] | None = None,
     instance_dir: str | os.PathLike[str] | None = None, fresh: bool = False,
     retry_failed: bool = False, progress: bool = True, update_reference: bool = False,
+    executor: str = "local",
 ) -> SweepConfig:
     """Check every option before anything runs.
 
@@ -148,7 +155,14 @@ def make_sweep_config(
     InputError
         An unknown solver, a bad omega, seed, count or time limit, or no set.
     """
-    from gtsp_bench.checks import check_int, check_omega, check_time_limit, parse_ks, parse_omegas
+    from gtsp_bench.checks import (
+        check_executor,
+        check_int,
+        check_omega,
+        check_time_limit,
+        parse_ks,
+        parse_omegas,
+    )
     from gtsp_bench.registry import solver_names, solver_specs
     from gtsp_bench.runner import _split_names
 
@@ -182,6 +196,7 @@ def make_sweep_config(
         out_dir=Path(out_dir) if out_dir is not None else DEFAULT_OUT,
         instance_dir=Path(instance_dir) if instance_dir is not None else Path("instances"),
         fresh=fresh, retry_failed=retry_failed, progress=progress, update_reference=update_reference,
+        executor=check_executor(executor),
     )
 
 
@@ -386,10 +401,25 @@ class SweepSummary:
 
 def run_sweep(config: SweepConfig, *, log: Callable[[str], None] | None = None) -> SweepSummary:
     """Run the sweep (finished solves in the task log are re-used unless ``config.fresh``), write
-    its outputs and, with ``config.update_reference``, the improved references."""
+    its outputs and, with ``config.update_reference``, the improved references.
+
+    The sweep holds :attr:`SweepConfig.lock_path` throughout: a second run on the same output
+    folder stops at once with an :class:`InputError` naming the lock.
+    """
+    from gtsp_bench.executors import close_executors
+
     say = log or (lambda msg: print(msg, file=sys.stderr))
-    t0 = time.perf_counter()
     loaded = load_sets(config)  # a bad set or file fails before anything is written
+    with exclusive_lock(config.lock_path, "another gtsp-bench bench"):
+        try:
+            return _run_sweep(config, loaded, say)
+        finally:
+            close_executors()
+
+
+def _run_sweep(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[Entry]]],
+               say: Callable[[str], None]) -> SweepSummary:
+    t0 = time.perf_counter()
     task_log = TaskLog(config.log_path)
     task_log.open()  # an output folder that cannot be written fails here, before any solve
     task_log.close()
@@ -427,7 +457,8 @@ def run_sweep(config: SweepConfig, *, log: Callable[[str], None] | None = None) 
                 if mine:
                     bar.set_description(solver)
                     summary.phases.append(run_solver_tasks(
-                        solver, mine, config.jobs, config.hard_limit(), on_record))
+                        solver, mine, config.jobs, config.hard_limit(), on_record,
+                        executor=config.executor))
         finally:
             bar.close()
             task_log.close()

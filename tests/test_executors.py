@@ -81,6 +81,36 @@ def test_dask_gives_the_local_pools_objectives_and_a_rerun_reuses_every_solve(tm
 
 
 @dask_mark
+def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path, scheduler, capsys):
+    """`bench --set FOLDER` with greedy and lns (seeded) on a Dask scheduler gives the local pool's
+    objectives solve for solve, re-uses every solve on a second run, and a sweep on a locked
+    folder stops at once with one line naming the lock."""
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.io import write_instance
+
+    folder = tmp_path / "tiny"
+    for i in range(3):
+        write_instance(generate_instance(4, 3, seed=i, name=f"tiny-{i}"), folder / f"tiny-{i}.json")
+    argv = ["bench", "--set", str(folder), "--solvers", "greedy,lns", "--omegas", "0.3,0.6",
+            "--time-limit", "2", "--jobs", "2", "--no-progress"]
+    assert main([*argv, "--out", str(tmp_path / "local")]) == 0
+    assert main([*argv, "--out", str(tmp_path / "dask"), "--executor", scheduler]) == 0
+    a = pd.read_csv(tmp_path / "local" / "sweep.csv")
+    b = pd.read_csv(tmp_path / "dask" / "sweep.csv")
+    assert len(a) == len(b) == 3 * 2 * 2 and a["objective"].notna().all()
+    for col in ("instance", "omega", "solver", "status", "objective"):
+        assert a[col].tolist() == b[col].tolist(), col
+    capsys.readouterr()
+    assert main([*argv, "--out", str(tmp_path / "dask"), "--executor", scheduler]) == 0
+    assert "12 already in" in capsys.readouterr().err
+    lock = tmp_path / "dask" / "tmp" / "bench.lock"
+    with exclusive_lock(lock, "a test"):
+        assert main([*argv, "--out", str(tmp_path / "dask")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{lock}: locked by another gtsp-bench bench" in err
+
+
+@dask_mark
 def test_a_dask_worker_lost_under_a_solve_is_retried_on_another(tmp_path, scheduler):
     """SIGKILL of the Dask worker running a solve (a machine lost mid-task): the scheduler gives
     the task to another worker and the solve is logged once, solved."""
