@@ -9,6 +9,7 @@ against the optimum is the root gap that explains the search time, beside ``milp
 final gap of the unproven) and the root gaps, and writes one CSV row per solve to ``--out``.
 
     nice -n 10 python benchmarks/textbook_runtime.py --instances 2 --time-limit 60
+    nice -n 10 python benchmarks/textbook_runtime.py --subtours dfj --out benchmarks/out/dfj.csv
 
 Timings are wall-clock, of one run on whatever machine runs it.
 """
@@ -25,6 +26,7 @@ from gtsp_bench.solvers.exact.textbook import MilpTextbook, build
 
 from gtsp_bench.checks import parse_ks
 from gtsp_bench.errors import SolverError
+from gtsp_bench.generator import instance_set
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
@@ -38,10 +40,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ks", default="4..10")
     ap.add_argument("--instances", type=int, default=2)
+    ap.add_argument("--nodes", type=int, default=20, help="N (20: the committed sets, else generated)")
     ap.add_argument("--omega", type=float, default=0.5)
     ap.add_argument("--time-limit", type=float, default=60.0)
     ap.add_argument("--subtours", default="mtz,flow")
-    ap.add_argument("--backend", default="highs")
+    ap.add_argument("--backend", default="highs", help="highs, gurobi or auto")
     ap.add_argument("--out", default="benchmarks/out/textbook_runtime.csv")
     args = ap.parse_args(argv)
     import cvxpy as cp
@@ -51,12 +54,14 @@ def main(argv: list[str] | None = None) -> int:
     records: list[list[object]] = []
     lines = []
     for k in parse_ks(args.ks):
-        folder = Path("instances") / f"uav-K{k}-N20-s1"
-        files = sorted(folder.glob("*.json"))[: args.instances]
+        if args.nodes == 20:  # the committed sets
+            folder = Path("instances") / f"uav-K{k}-N20-s1"
+            instances = [read_instance(f) for f in sorted(folder.glob("*.json"))[: args.instances]]
+        else:
+            instances = instance_set(args.instances, k, 1, n_nodes=args.nodes)
         runs: dict[str, list[tuple[str, float, float | None, float]]] = {s: [] for s in solvers}
         root: dict[str, list[float]] = {s: [] for s in ["milp", *subtours]}
-        for f in files:
-            inst = read_instance(f)
+        for inst in instances:
             opt = run_solver("dp", inst, args.omega).objective
             for s in solvers:
                 solver = (MilpTextbook(subtour=s.split(":")[1], backend=args.backend)

@@ -17,10 +17,14 @@ one node, ``n`` clusters in all):
   - ``subtour=mtz`` (Miller-Tucker-Zemlin): an order ``1 <= u_c <= n - 1`` per other cluster and
     ``u_c - u_d + (n - 1) z_cd <= n - 2`` for every pair of other clusters;
   - ``subtour=flow`` (single-commodity flow, Gavish-Graves): the root sends one unit to each other
-    cluster along the tour, ``0 <= f_cd <= (n - 1) z_cd``.
+    cluster along the tour, ``0 <= f_cd <= (n - 1) z_cd``;
+  - ``subtour=dfj`` (Dantzig-Fulkerson-Johnson, the paper's constraint): ``sum_{c, d in S} z_cd
+    <= |S| - 1`` for every set ``S`` of two or more clusters besides the root, all written out
+    (``2^(n-1)`` rows: refused beyond :data:`DFJ_MAX_CLUSTERS` clusters).
 
-Both are compact (polynomially many rows) and both have weak LP relaxations; the root LP bound of
-each is measured against ``milp``'s in ``docs/solvers/exact.md``. The answer is read off the
+MTZ and flow are compact (polynomially many rows); all three have weak LP relaxations, because
+they act on the clusters and not on the heads. The root LP bound of each is measured against
+``milp``'s in ``docs/solvers/exact.md``. The answer is read off the
 rounded ``x`` and ``y``, checked to be one cycle through one node of every cluster (else the solve
 is reported ``failed``, never as a wrong tour), and re-priced by the registry as every solver's is.
 
@@ -45,7 +49,9 @@ from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
 
 #: Subtour elimination constraints on offer.
-SUBTOURS = ("mtz", "flow")
+SUBTOURS = ("mtz", "flow", "dfj")
+#: Most clusters besides the root for ``subtour=dfj`` (it writes a row per set of them).
+DFJ_MAX_CLUSTERS = 14
 #: MILP solvers on offer (``auto``: Gurobi when it is installed and takes the model, else HiGHS).
 BACKENDS = ("highs", "gurobi", "auto")
 #: Absolute gap under which the solver's optimum counts as proven (as ``milp``'s ``abs_gap``).
@@ -113,6 +119,10 @@ def build(problem: Problem, subtour: str = "mtz", *, relax: bool = False) -> Tex
 
     check_choice("subtour", subtour, SUBTOURS)
     n, m = problem.n_clusters, problem.n_nodes
+    if subtour == "dfj" and n - 1 > DFJ_MAX_CLUSTERS:
+        raise InputError(f"milp-textbook -p subtour=dfj writes a row per set of clusters: at most "
+                         f"{DFJ_MAX_CLUSTERS} besides the root, {problem.instance.name} has {n - 1}; "
+                         f"use subtour=mtz or flow")
     tail, head = arcs(problem)
     a = len(tail)
     root = root_cluster(problem)
@@ -146,6 +156,20 @@ def build(problem: Problem, subtour: str = "mtz", *, relax: bool = False) -> Tex
                                 shape=(len(cd), len(others)))
             order = cp.Variable(len(others))
             rows += [order >= 1, order <= n - 1, diff @ order + (n - 1) * (agg @ x) <= n - 2]
+        elif subtour == "dfj":
+            others = np.array([c for c in range(n) if c != root])
+            cd = np.array([(i, j) for i in range(n - 1) for j in range(n - 1) if i != j])
+            index = np.full(n * n, -1)
+            index[others[cd[:, 0]] * n + others[cd[:, 1]]] = np.arange(len(cd))
+            keep = np.flatnonzero(index[pair] >= 0)
+            agg = sp.csr_array((np.ones(len(keep)), (index[pair[keep]], keep)), shape=(len(cd), a))
+            masks = np.arange(1, 1 << (n - 1), dtype=np.int64)
+            size = np.array([m.bit_count() for m in masks.tolist()])
+            masks, size = masks[size >= 2], size[size >= 2]
+            inside = ((masks[:, None] >> cd[:, 0]) & (masks[:, None] >> cd[:, 1]) & 1).astype(bool)
+            sets = sp.csr_array(inside.astype(np.float64))
+            z = cp.Variable(len(cd))  # arcs between clusters, so that a set's row is short
+            rows += [z == agg @ x, sets @ z <= size - 1]
         else:
             cd = np.array([(c, d) for c in range(n) for d in range(n) if c != d])
             index = np.full(n * n, -1)
@@ -201,8 +225,8 @@ class MilpTextbook:
     Parameters
     ----------
     subtour
-        ``"mtz"`` (Miller-Tucker-Zemlin orders over the clusters) or ``"flow"`` (single-commodity
-        flow over the clusters).
+        ``"mtz"`` (Miller-Tucker-Zemlin orders over the clusters), ``"flow"`` (single-commodity
+        flow over the clusters) or ``"dfj"`` (a subtour row per set of clusters, all written out).
     backend
         ``"highs"``, ``"gurobi"`` (gurobipy must be installed and licensed for the model's size)
         or ``"auto"``: Gurobi when that holds, else HiGHS; ``stats["backend"]`` says which ran.
