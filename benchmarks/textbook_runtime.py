@@ -1,15 +1,16 @@
-"""The textbook MILP (``milp-textbook``, MTZ and flow) against ``milp`` and ``dp``, K = 4..10.
+"""The textbook MILP (``milp-textbook``: DFJ, MTZ, flow) against ``milp`` and ``dp``, K = 4..10.
 
 For each K, the first ``--instances`` instances of the committed set ``instances/uav-K{K}-N20-s1``
-are solved at one omega by ``dp``, ``milp`` and ``milp-textbook`` with each subtour form (HiGHS
-through cvxpy; ``--backend auto`` uses Gurobi where it is licensed for the model's size), each
-under ``--time-limit`` seconds. It also solves each textbook model's LP relaxation, whose bound
-against the optimum is the root gap that explains the search time, beside ``milp``'s root bound
-(after its cuts). Prints a markdown table (median time to proven optimum, proven count, median
-final gap of the unproven) and the root gaps, and writes one CSV row per solve to ``--out``.
+(other ``--nodes``: the generated set of that N) are solved at one omega by ``dp``, ``milp`` and
+``milp-textbook`` with each subtour form (HiGHS through cvxpy; ``--backend gurobi`` or ``auto``
+for Gurobi where it is licensed for the model's size), each under ``--time-limit`` seconds. It
+also solves each textbook model's LP relaxation: its bound against the optimum is the root gap
+that explains the search time, shown beside ``milp``'s root bound (after its cuts). Prints a
+markdown table (median time to proven optimum, proven count; for the unproven, how far the bound
+lies below and the tour above the optimum) and the root gaps, and writes one CSV row per solve
+to ``--out``. The table in ``docs/solvers/exact.md`` is
 
     nice -n 10 python benchmarks/textbook_runtime.py --instances 2 --time-limit 60
-    nice -n 10 python benchmarks/textbook_runtime.py --subtours dfj --out benchmarks/out/dfj.csv
 
 Timings are wall-clock, of one run on whatever machine runs it.
 """
@@ -43,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--nodes", type=int, default=20, help="N (20: the committed sets, else generated)")
     ap.add_argument("--omega", type=float, default=0.5)
     ap.add_argument("--time-limit", type=float, default=60.0)
-    ap.add_argument("--subtours", default="mtz,flow")
+    ap.add_argument("--subtours", default="dfj,mtz,flow")
     ap.add_argument("--backend", default="highs", help="highs, gurobi or auto")
     ap.add_argument("--out", default="benchmarks/out/textbook_runtime.csv")
     args = ap.parse_args(argv)
@@ -59,7 +60,8 @@ def main(argv: list[str] | None = None) -> int:
             instances = [read_instance(f) for f in sorted(folder.glob("*.json"))[: args.instances]]
         else:
             instances = instance_set(args.instances, k, 1, n_nodes=args.nodes)
-        runs: dict[str, list[tuple[str, float, float | None, float]]] = {s: [] for s in solvers}
+        # per solver: (status, seconds, bound, objective, optimum)
+        runs: dict[str, list[tuple[str, float, float | None, float, float]]] = {s: [] for s in solvers}
         root: dict[str, list[float]] = {s: [] for s in ["milp", *subtours]}
         for inst in instances:
             opt = run_solver("dp", inst, args.omega).objective
@@ -70,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
                     r = run_solver(solver, inst, args.omega, time_limit=args.time_limit, name=s)
                 except SolverError as e:  # no tour within the limit
                     records.append([k, inst.name, args.omega, s, "failed", "", "", "", "", str(e)])
-                    runs[s].append(("failed", args.time_limit, None, float("nan")))
+                    runs[s].append(("failed", args.time_limit, None, float("nan"), opt))
                     print(f"K={k} {inst.name} {s}: failed ({e})", file=sys.stderr, flush=True)
                     continue
                 rb = r.stats.get("root_bound")
@@ -80,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
                 records.append([k, inst.name, args.omega, s, r.status, repr(r.objective),
                                 repr(r.lower_bound), f"{r.runtime_s:.3f}", "" if rb is None else repr(rb),
                                 r.stats.get("backend", "") + (" (no tour: greedy)" if no_tour else "")])
-                runs[s].append(("failed" if no_tour else r.status, r.runtime_s, r.lower_bound, r.objective))
+                runs[s].append(("failed" if no_tour else r.status, r.runtime_s, r.lower_bound, r.objective,
+                                opt))
                 print(f"K={k} {inst.name} {s}: {r.status} {r.objective:.4f} bound {r.lower_bound} "
                       f"{r.runtime_s:.2f} s", file=sys.stderr, flush=True)
             problem = price(inst, args.omega)
@@ -94,16 +97,18 @@ def main(argv: list[str] | None = None) -> int:
                                 "", repr(lp), f"{time.perf_counter() - t:.3f}", repr(lp), "highs"])
         cells = []
         for s in solvers:
-            proven = [t for st, t, _, _ in runs[s] if st == "optimal"]
-            gaps = [100 * (obj - lb) / obj for st, _, lb, obj in runs[s]
-                    if st == "time_limit" and lb is not None]
+            proven = [t for st, t, _, _, _ in runs[s] if st == "optimal"]
             cell = f"{statistics.median(proven):.2f} s" if proven else "-"
             cell += f" ({len(proven)}/{len(runs[s])})"
-            failed = sum(st == "failed" for st, _, _, _ in runs[s])
+            failed = sum(st == "failed" for st, *_ in runs[s])
             if failed:
                 cell += f", {failed} no tour"
-            if gaps:
-                cell += f", gap {statistics.median(gaps):.1f} %"
+            bounds = [100 * (o - lb) / o for st, _, lb, _, o in runs[s] if st != "optimal" and lb is not None]
+            tours = [100 * (obj - o) / o for st, _, _, obj, o in runs[s] if st == "time_limit"]
+            if bounds:
+                cell += f", bound -{statistics.median(bounds):.1f} %"
+            if tours:
+                cell += f", tour +{statistics.median(tours):.1f} %"
             cells.append(cell)
         gaps = " | ".join(f"{round(statistics.mean(root[s]), 1) + 0.0:.1f} %" for s in root)
         lines.append(f"| {k} | " + " | ".join(cells) + f" | {gaps} |")
@@ -112,7 +117,8 @@ def main(argv: list[str] | None = None) -> int:
     print(head)
     print("|" + "---|" * (1 + len(solvers) + 1 + len(subtours)))
     print("\n".join(lines))
-    print(f"\ncells: median time to proven optimum (proven/solved), median final gap of the unproven; "
+    print(f"\ncells: median time to proven optimum (proven/solved); of the unproven, the median bound "
+          "below and tour above the optimum; "
           f"time limit {args.time_limit:g} s, omega {args.omega:g}; root gap: mean (optimum - bound) / "
           "optimum")
     write_csv(args.out, COLUMNS, records)

@@ -113,7 +113,7 @@ def root_cluster(problem: Problem) -> int:
     return int(np.argmin([len(c) for c in problem.clusters]))
 
 
-def build(problem: Problem, subtour: str = "mtz", *, relax: bool = False) -> TextbookModel:
+def build(problem: Problem, subtour: str = "dfj", *, relax: bool = False) -> TextbookModel:
     """The cvxpy model of ``problem`` (``relax``: its LP relaxation, ``0 <= x, y <= 1``)."""
     import cvxpy as cp
 
@@ -164,7 +164,7 @@ def build(problem: Problem, subtour: str = "mtz", *, relax: bool = False) -> Tex
             keep = np.flatnonzero(index[pair] >= 0)
             agg = sp.csr_array((np.ones(len(keep)), (index[pair[keep]], keep)), shape=(len(cd), a))
             masks = np.arange(1, 1 << (n - 1), dtype=np.int64)
-            size = np.array([m.bit_count() for m in masks.tolist()])
+            size = np.array([mask.bit_count() for mask in masks.tolist()])
             masks, size = masks[size >= 2], size[size >= 2]
             inside = ((masks[:, None] >> cd[:, 0]) & (masks[:, None] >> cd[:, 1]) & 1).astype(bool)
             sets = sp.csr_array(inside.astype(np.float64))
@@ -178,10 +178,9 @@ def build(problem: Problem, subtour: str = "mtz", *, relax: bool = False) -> Tex
             r = np.arange(len(cd))
             balance = sp.csr_array((np.r_[np.ones(len(cd)), -np.ones(len(cd))],
                                     (np.r_[cd[:, 1], cd[:, 0]], np.r_[r, r])), shape=(n, len(cd)))
-            demand = np.ones(n)
             others = np.array([c for c in range(n) if c != root])
-            flow = cp.Variable(len(cd), nonneg=True)
-            rows += [flow <= (n - 1) * (agg @ x), (balance @ flow)[others] == demand[others]]
+            flow = cp.Variable(len(cd), nonneg=True)  # each cluster but the root keeps one unit
+            rows += [flow <= (n - 1) * (agg @ x), (balance @ flow)[others] == 1]
     cost = problem.node_cost @ y + problem.edge_cost[tail, head] @ x
     return TextbookModel(problem, tail, head, root, cp.Problem(cp.Minimize(cost), rows), x, y)
 
@@ -226,7 +225,9 @@ class MilpTextbook:
     ----------
     subtour
         ``"mtz"`` (Miller-Tucker-Zemlin orders over the clusters), ``"flow"`` (single-commodity
-        flow over the clusters) or ``"dfj"`` (a subtour row per set of clusters, all written out).
+        flow over the clusters) or ``"dfj"`` (a subtour row per set of clusters, all written out;
+        the default: it proves the most of the three, see ``docs/solvers/exact.md``, but is
+        refused beyond :data:`DFJ_MAX_CLUSTERS` clusters besides the root).
     backend
         ``"highs"``, ``"gurobi"`` (gurobipy must be installed and licensed for the model's size)
         or ``"auto"``: Gurobi when that holds, else HiGHS; ``stats["backend"]`` says which ran.
@@ -238,7 +239,7 @@ class MilpTextbook:
         Print the solver's log.
     """
 
-    def __init__(self, subtour: str = "mtz", backend: str = "auto", max_binaries: int = 200_000,
+    def __init__(self, subtour: str = "dfj", backend: str = "auto", max_binaries: int = 200_000,
                  threads: int = 1, verbose: bool = False) -> None:
         self.subtour = check_choice("subtour", subtour, SUBTOURS)
         self.backend = check_choice("backend", backend, BACKENDS)
