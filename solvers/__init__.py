@@ -46,6 +46,8 @@ BUILTIN: tuple[Builtin, ...] = (
     Builtin("milp", f"{_E}.milp:Milp",
             "HiGHS MILP: lifted subtour cuts, pricing, own branch and cut (exact; the reference)",
             bench=False),
+    Builtin("milp-textbook", f"{_E}.textbook:MilpTextbook",
+            "the hand-written MILP (DFJ, MTZ or flow) in cvxpy, solved whole by HiGHS/Gurobi", bench=False),
     Builtin("gurobi", f"{_E}.gurobi:Gurobi",
             "the milp model through gurobipy, lazy subtour rows (exact; optional extra)", bench=False),
     Builtin("drl", f"{_L}.solver:DRL",
