@@ -9,7 +9,7 @@ K      ?= 4..10
 BENCH_ARGS ?=
 SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl bench-sets clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl bench-sets bench-scale clean
 
 install: $(STAMP)
 
@@ -54,6 +54,14 @@ SET ?= gtsplib
 SET_ARGS ?=
 bench-sets: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --set $(SET) $(SET_ARGS)
+
+# The scale experiment: the paper's solvers and ours on the committed UAV sets of K = 20..200
+# against their reference.csv (outputs in results/scale; SCALE_ARGS passes more options).
+SCALE_SETS = --set uav-K20-N20-s1 --set uav-K50-N20-s1 --set uav-K100-N20-s1 --set uav-K200-N20-s1
+SCALE_ARGS ?=
+bench-scale: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench $(SCALE_SETS) --solvers greedy,aco,drl,am,lns \
+		--omegas 0.5 --instances 10 --time-limit 10 --out results/scale $(SCALE_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info
