@@ -11,7 +11,9 @@ Two instance formats:
 * GTSPLIB ``.gtsp``: TSPLIB95 plus ``TYPE : GTSP``, ``GTSP_SETS : M`` and a ``GTSP_SET_SECTION``
   of ``set_id node node ... -1`` records. Coordinate types EUC_2D, CEIL_2D, ATT, GEO, GEOM, and
   EXPLICIT weights in any TSPLIB95 ``EDGE_WEIGHT_FORMAT`` (FULL_MATRIX, UPPER_ROW, LOWER_ROW,
-  UPPER_DIAG_ROW, LOWER_DIAG_ROW and the ``_COL`` forms), symmetric only.
+  UPPER_DIAG_ROW, LOWER_DIAG_ROW and the ``_COL`` forms). ``TYPE : AGTSP`` (asymmetric) files
+  give a FULL_MATRIX whose row i, column j is the cost of going from node i to node j; they
+  become an instance with ``symmetric=False``.
 
 And TSPLIB tour files (``TOUR_SECTION`` of 1-based node ids, ``-1`` at the end), the form in which
 GTSPLIB's best tours are given: :func:`parse_tour`, then :func:`tour_to_solution`.
@@ -232,15 +234,16 @@ def parse_gtsp(text: str) -> Instance:
     Clusters keep the file's set order; the nodes of a set keep the order in which the set lists
     them. ``meta`` records the name, comment and original node ids. Explicit weights in any
     triangle format become the full matrix; the diagonal is ignored (TSPLIB95; some files put a
-    large number there) and stored as 0.
+    large number there) and stored as 0. An ``AGTSP`` file (its FULL_MATRIX may be asymmetric:
+    row = from, column = to) gives an instance with ``symmetric=False``; a symmetric type whose
+    FULL_MATRIX is not symmetric is an error.
     """
     header, sections = _tsplib_sections(text)
     # The first word: "TYPE : GTSP (M.~Hofmeister)" occurs.
     gtsp_type = (header.get("TYPE", "").split() or [""])[0].upper()
     if gtsp_type not in {"GTSP", "AGTSP"} and "GTSP_SETS" not in header:
         raise InputError("not a GTSP file (TYPE is not GTSP and there is no GTSP_SETS)")
-    if gtsp_type == "AGTSP":
-        raise InputError("asymmetric GTSP (AGTSP) is not supported")
+    symmetric = gtsp_type != "AGTSP"
     ewt = header.get("EDGE_WEIGHT_TYPE", "").upper()
     if ewt not in _COORD_TYPES | {"EXPLICIT"}:
         raise InputError(
@@ -254,7 +257,9 @@ def parse_gtsp(text: str) -> Instance:
     sets = _parse_sets(sections.get("GTSP_SET_SECTION"), dim, n_sets)
     weights = None
     if ewt == "EXPLICIT":
-        weights = _parse_weights(header, sections.get("EDGE_WEIGHT_SECTION"), dim)
+        weights = _parse_weights(header, sections.get("EDGE_WEIGHT_SECTION"), dim, symmetric)
+    elif not symmetric:
+        raise InputError(f"an asymmetric (AGTSP) file needs EXPLICIT weights, not {ewt}")
     order = np.concatenate(sets)  # original (0-based) node ids in cluster order
     if coords is None:
         coords = np.full((dim, 2), np.nan)
@@ -271,6 +276,7 @@ def parse_gtsp(text: str) -> Instance:
         edge_weight_type=ewt,
         weights=None if weights is None else weights[np.ix_(order, order)],
         meta=meta,
+        symmetric=symmetric,
     )
     check_instance_numbers(instance)
     return instance
@@ -363,12 +369,16 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
     return [np.array(sets[s]) for s in sorted(sets)]
 
 
-def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int) -> np.ndarray:
-    """The full symmetric ``(dim, dim)`` matrix of an EDGE_WEIGHT_SECTION, zero diagonal."""
+def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int,
+                   symmetric: bool = True) -> np.ndarray:
+    """The full ``(dim, dim)`` matrix of an EDGE_WEIGHT_SECTION, zero diagonal; row = from,
+    column = to. Only a FULL_MATRIX can be asymmetric, and only when ``symmetric`` is false."""
     fmt = header.get("EDGE_WEIGHT_FORMAT", "").upper()
     if fmt not in _WEIGHT_FORMATS:
         raise InputError(f"unsupported EDGE_WEIGHT_FORMAT {fmt or '(missing)'!r} "
                          f"(supported: {', '.join(_WEIGHT_FORMATS)})")
+    if not symmetric and fmt != "FULL_MATRIX":
+        raise InputError(f"an asymmetric (AGTSP) file needs EDGE_WEIGHT_FORMAT FULL_MATRIX, not {fmt}")
     if lines is None:
         raise InputError("missing EDGE_WEIGHT_SECTION")
     try:
@@ -392,8 +402,10 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
         w[cols, rows] = values
     np.fill_diagonal(w, 0.0)
     check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
-    if fmt == "FULL_MATRIX" and not np.allclose(w, w.T):  # a triangle is symmetric as built
-        raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
+    if symmetric and fmt == "FULL_MATRIX" and not np.array_equal(w, w.T):  # a triangle is symmetric
+        i, j = (int(v) for v in np.argwhere(w != w.T)[0])
+        raise InputError(f"EDGE_WEIGHT_SECTION is not symmetric (node {i + 1} to {j + 1} weighs "
+                         f"{w[i, j]:g}, back {w[j, i]:g}); an asymmetric file says TYPE : AGTSP")
     return w
 
 
@@ -402,7 +414,7 @@ def format_gtsp(instance: Instance) -> str:
     if instance.params is not None:
         raise InputError(f"{instance.name} is a UAV instance; write it as .json")
     ewt = instance.edge_weight_type
-    lines = [f"NAME : {instance.name}", "TYPE : GTSP"]
+    lines = [f"NAME : {instance.name}", f"TYPE : {'GTSP' if instance.symmetric else 'AGTSP'}"]
     if instance.meta.get("comment"):
         lines.append(f"COMMENT : {instance.meta['comment']}")
     lines += [f"DIMENSION : {instance.n_nodes}", f"GTSP_SETS : {instance.n_clusters}",
