@@ -87,18 +87,24 @@ class Instance:
         explicit = self.edge_weight_type == "EXPLICIT"
         if len(self.clusters) == 0:
             raise InputError("an instance needs at least one cluster")
-        clusters = []
+        arrays = []
         for k, pts in enumerate(self.clusters):
-            arr = np.array(pts, dtype=np.float64)
+            arr = np.asarray(pts, dtype=np.float64)
             if arr.size == 0:
                 raise InputError(f"cluster {k} is empty")
             if arr.ndim != 2 or arr.shape[1] != 2:
                 raise InputError(f"cluster {k} must be a list of [x, y] pairs")
-            if not explicit and not np.all(np.isfinite(arr)):
-                raise InputError(f"cluster {k} has a NaN or infinite coordinate")
-            arr.setflags(write=False)
-            clusters.append(arr)
-        object.__setattr__(self, "clusters", tuple(clusters))
+            arrays.append(arr)
+        # One copy the instance owns (read-only); the clusters are views of it, in order.
+        coords = np.concatenate(arrays)
+        if not explicit and not np.all(np.isfinite(coords)):
+            bad = np.flatnonzero(~np.isfinite(coords).all(axis=1))[0]
+            k = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), bad, side="right"))
+            raise InputError(f"cluster {k} has a NaN or infinite coordinate")
+        coords.setflags(write=False)
+        ends = np.cumsum([len(a) for a in arrays])[:-1]
+        object.__setattr__(self, "clusters", tuple(np.split(coords, ends)))
+        self.__dict__["coords"] = coords  # the cached property, already at hand
         if self.depot is not None:
             depot = _frozen_array(self.depot)
             if depot.shape != (2,):

@@ -263,7 +263,7 @@ def parse_gtsp(text: str) -> Instance:
     order = np.concatenate(sets)  # original (0-based) node ids in cluster order
     if coords is None:
         coords = np.full((dim, 2), np.nan)
-    clusters = tuple(coords[s] for s in sets)
+    clusters = tuple(np.split(coords[order], np.cumsum([len(s) for s in sets])[:-1]))
     name = header.get("NAME", "gtsp")
     meta = {"format": "gtsplib", "node_ids": (order + 1).tolist()}
     if header.get("COMMENT"):
@@ -299,6 +299,9 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
         if ewt == "EXPLICIT":
             return None
         raise InputError("missing NODE_COORD_SECTION")
+    fast = _coords_fast(lines, dim)
+    if fast is not None:
+        return fast
     points: dict[int, tuple[float, float]] = {}
     for line in lines:
         parts = line.split()
@@ -320,6 +323,27 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
     return coords
 
 
+def _coords_fast(lines: list[str], dim: int) -> np.ndarray | None:
+    """The coordinates of well-formed lines ``node x y`` (each node 1..dim once, finite values),
+    vectorised; ``None`` for anything else, which the line-by-line reader then names."""
+    tokens = " ".join(lines).split()
+    if len(lines) != dim or len(tokens) != 3 * dim:
+        return None
+    try:
+        table = np.array(tokens, dtype=np.float64).reshape(dim, 3)
+    except ValueError:
+        return None
+    ids = table[:, 0]
+    if not (np.all(ids == np.round(ids)) and np.all(np.isfinite(table[:, 1:]))):
+        return None
+    nodes = ids.astype(np.int64)
+    if nodes.min() < 1 or nodes.max() > dim or np.bincount(nodes).max() > 1:
+        return None
+    coords = np.empty((dim, 2))
+    coords[nodes - 1] = table[:, 1:]
+    return coords
+
+
 def _first_missing(present: Iterable[int]) -> int:
     """The smallest id >= 1 that is not in ``present``."""
     ids = sorted(present)
@@ -332,6 +356,9 @@ def _first_missing(present: Iterable[int]) -> int:
 def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarray]:
     if lines is None:
         raise InputError("missing GTSP_SET_SECTION")
+    fast = _sets_fast(lines, dim, n_sets)
+    if fast is not None:
+        return fast
     tokens: list[int] = []
     for line in lines:
         try:
@@ -367,6 +394,31 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
     if len(owner) < dim:
         raise InputError(f"node {_first_missing(n + 1 for n in owner)} is in no set")
     return [np.array(sets[s]) for s in sorted(sets)]
+
+
+def _sets_fast(lines: list[str], dim: int, n_sets: int) -> list[np.ndarray] | None:
+    """The sets of a well-formed GTSP_SET_SECTION (``n_sets`` records ``id node ... -1`` with
+    distinct ids, every node 1..dim in exactly one), vectorised and by set id; ``None`` for
+    anything else, which the record-by-record reader then names."""
+    try:
+        tokens = np.array(" ".join(lines).split(), dtype=np.int64)
+    except (ValueError, OverflowError):
+        return None
+    ends = np.flatnonzero(tokens == -1)
+    if len(ends) != n_sets or len(tokens) == 0 or ends[-1] != len(tokens) - 1:
+        return None
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    ids = tokens[starts]
+    is_member = np.ones(len(tokens), dtype=bool)
+    is_member[starts] = False
+    is_member[ends] = False
+    members = tokens[is_member]
+    if (np.any(ends - starts < 2) or len(members) != dim or members.min() < 1
+            or members.max() > dim or np.bincount(members).max() > 1
+            or len(set(ids.tolist())) != n_sets):
+        return None
+    by_id = np.argsort(ids, kind="stable")
+    return [tokens[starts[i] + 1:ends[i]] - 1 for i in by_id]
 
 
 def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int,
