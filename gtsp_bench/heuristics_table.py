@@ -11,10 +11,11 @@ and peer (:data:`SOLVERS`) with one time budget per solve on
   square area grows with K (:func:`uav_area`) so that the clusters cover at most a quarter of it
   (the generator places at most :data:`~gtsp_bench.generator.MAX_COVER` of an area).
 
-It writes one CSV row per solve (``<out>/heuristics-table.csv``, default ``benchmarks/out``) and
-the Markdown table, with the command that made it, into the generated block
+It writes one CSV row per solve (``--csv``, default ``benchmarks/heuristics-table.csv``, committed
+with the page) and the Markdown table, with the command that made it, into the generated block
 ``heuristics-table`` of ``docs/solvers/heuristics.md`` (the mechanism of
-:func:`gtsp_bench.report.refresh_blocks`). A cell is the mean gap in percent and the median solve
+:func:`gtsp_bench.report.refresh_blocks`); the block's table is what :func:`markdown` makes of the
+CSV's rows (:func:`read_rows`), which the tests check. A cell is the mean gap in percent and the median solve
 time; ``*`` when a solve stopped at the time limit; ``refused`` or ``failed`` when no solve of
 the cell gave an answer (a partly answered cell counts only its answers and says ``n/m``).
 Timings are wall-clock, of one run on whatever machine runs it.
@@ -57,6 +58,8 @@ UAV_COVER = 0.25
 #: The page and the name of the generated block the table goes to.
 DOCS_PAGE = Path("docs") / "solvers" / "heuristics.md"
 BLOCK = "heuristics-table"
+#: The rows of the table in the page (committed with it).
+DEFAULT_CSV = Path("benchmarks") / "heuristics-table.csv"
 COLUMNS = ("group", "instance", "solver", "status", "objective", "reference", "reference_kind",
            "gap_percent", "runtime_s", "note")
 _NO_ANSWER = ("failed", "refused")
@@ -77,7 +80,7 @@ class TableConfig:
     gtsplib: bool = True
     agtsp: bool = True
     max_nodes: int = 15_000
-    out_dir: Path = Path("benchmarks") / "out"
+    csv: Path = DEFAULT_CSV
     docs: Path | None = DOCS_PAGE
 
 
@@ -190,7 +193,7 @@ def write_outputs(rows: Sequence[Row], config: TableConfig, command: str, wall_s
     """The CSV rows and, when ``config.docs`` is set, the page's generated block; the CSV path."""
     from gtsp_bench.report import refresh_blocks
 
-    path = write_csv(config.out_dir / "heuristics-table.csv", COLUMNS, (
+    path = write_csv(config.csv, COLUMNS, (
         [r.group, r.instance, r.solver, r.status, repr(r.objective), repr(r.reference),
          r.reference_kind, f"{r.gap:.6f}" if math.isfinite(r.gap) else "", f"{r.runtime_s:.4f}",
          r.note] for r in rows))
@@ -201,8 +204,28 @@ def write_outputs(rows: Sequence[Row], config: TableConfig, command: str, wall_s
     return path
 
 
+def read_rows(path: Path) -> list[Row]:
+    """The rows of a CSV that :func:`write_outputs` wrote, in file order."""
+    import csv
+
+    def number(text: str) -> float:
+        return float(text) if text else math.nan
+
+    with Path(path).open(newline="") as f:
+        return [Row(r["group"], r["instance"], None, r["solver"], r["status"], number(r["objective"]),
+                    runtime_s=number(r["runtime_s"]), note=r["note"], reference=number(r["reference"]),
+                    reference_kind=r["reference_kind"]) for r in csv.DictReader(f)]
+
+
+class _Parser(argparse.ArgumentParser):
+    """Bad arguments are one ``gtsp-bench: error:`` line and exit code 2, as in the CLI."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"gtsp-bench: error: {message}\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="python -m gtsp_bench.heuristics_table",
         description="Heuristics and peers on GTSPLIB (by size) and on generated UAV instances of "
                     "large K: gap and time per group, into docs/solvers/heuristics.md.")
@@ -223,8 +246,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="largest GTSPLIB instance in nodes (default: 15000)")
     p.add_argument("--no-gtsplib", action="store_true", help="generated instances only")
     p.add_argument("--no-agtsp", action="store_true", help="leave out the asymmetric GTSPLIB files")
-    p.add_argument("--out", "-o", default=str(Path("benchmarks") / "out"), metavar="DIR",
-                   help="folder of heuristics-table.csv (default: benchmarks/out)")
+    p.add_argument("--csv", default=str(DEFAULT_CSV), metavar="FILE",
+                   help=f"one row per solve (default: {DEFAULT_CSV})")
     p.add_argument("--docs", default=str(DOCS_PAGE), metavar="PAGE",
                    help=f"page whose '{BLOCK}' block gets the table (default: {DOCS_PAGE})")
     p.add_argument("--no-docs", action="store_true", help="leave the documentation alone")
@@ -248,7 +271,7 @@ def make_config(args: argparse.Namespace) -> TableConfig:
         omega=check_omega(args.omega), set_seed=check_seed(args.seed),
         solver_seed=check_seed(args.solver_seed), gtsplib=not args.no_gtsplib,
         agtsp=not args.no_agtsp, max_nodes=check_int("--max-nodes", args.max_nodes, 1),
-        out_dir=Path(args.out), docs=None if args.no_docs else Path(args.docs),
+        csv=Path(args.csv), docs=None if args.no_docs else Path(args.docs),
     )
 
 

@@ -12,6 +12,8 @@ from gtsp_bench import heuristics_table as ht
 from gtsp_bench.generator import MAX_COVER, check_generator_args
 from gtsp_bench.tables import Row
 
+from .conftest import REPO
+
 PAGE = "# Page\n\ntext before\n\n<!-- BEGIN generated:heuristics-table -->\nold\n" \
        "<!-- END generated:heuristics-table -->\n\ntext after\n"
 
@@ -70,10 +72,10 @@ def test_run_writes_csv_and_the_page_block(tmp_path, capsys):
     page = tmp_path / "page.md"
     page.write_text(PAGE)
     argv = ["--time-limit", "1", "--per-group", "1", "--max-nodes", "20", "-K", "4",
-            "--uav-instances", "1", "--solvers", "greedy,greedy+ls", "--out", str(tmp_path),
+            "--uav-instances", "1", "--solvers", "greedy,greedy+ls", "--csv", str(tmp_path / "t.csv"),
             "--docs", str(page)]
     assert ht.main(argv) == 0
-    with (tmp_path / "heuristics-table.csv").open() as f:
+    with (tmp_path / "t.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert [(r["instance"], r["solver"], r["status"]) for r in rows if r["status"] == "refused"] == [
         ("4br17", "greedy+ls", "refused")]
@@ -84,10 +86,28 @@ def test_run_writes_csv_and_the_page_block(tmp_path, capsys):
     assert "\nold\n" not in text and "| GTSPLIB AGTSP | 1 | best known | 0.00% " in text
     assert "make bench-heuristics-table TABLE_ARGS='--time-limit 1 " in text
     assert "| greedy | greedy+ls |" in capsys.readouterr().out
+    assert ht.markdown(ht.read_rows(tmp_path / "t.csv"), ["greedy", "greedy+ls"]) in text
+
+
+def test_the_committed_block_is_made_from_the_committed_rows():
+    """docs/solvers/heuristics.md's table is what markdown() makes of benchmarks/heuristics-table.csv."""
+    rows = ht.read_rows(REPO / ht.DEFAULT_CSV)
+    solvers = list(dict.fromkeys(r.solver for r in rows))
+    assert set(solvers) == set(ht.SOLVERS)
+    page = (REPO / ht.DOCS_PAGE).read_text(encoding="utf-8")
+    begin = page.index(f"<!-- BEGIN generated:{ht.BLOCK} -->")
+    end = page.index(f"<!-- END generated:{ht.BLOCK} -->")
+    assert ht.markdown(rows, solvers) in page[begin:end]
 
 
 def test_bad_options_are_one_line(tmp_path, capsys):
-    """An unknown solver or a missing page: one gtsp-bench: error line, exit code 2."""
+    """An unknown solver, a missing page or a malformed number: one gtsp-bench: error line, exit
+    code 2."""
+    with pytest.raises(SystemExit) as stop:
+        ht.main(["--time-limit", "x"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err == "gtsp-bench: error: argument --time-limit/-t: invalid float value: 'x'\n"
     assert ht.main(["--solvers", "greedy,nope", "--no-docs"]) == 2
     assert capsys.readouterr().err.startswith("gtsp-bench: error: unknown solver 'nope' (valid: ")
     assert ht.main(["--docs", str(tmp_path / "none.md")]) == 2
