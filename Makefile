@@ -9,7 +9,7 @@ K      ?= 4..10
 BENCH_ARGS ?=
 SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-drl bench-sets bench-scale clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-sets bench-scale clean
 
 install: $(STAMP)
 
@@ -44,6 +44,12 @@ bench-exact: $(STAMP)
 
 bench-heuristics: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite heuristics $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+# Every heuristic and peer on GTSPLIB by size and on UAV instances of K = 20..200, into the generated
+# block of docs/solvers/heuristics.md; TABLE_ARGS="--time-limit 30 --per-group 5" (--help for more).
+TABLE_ARGS ?=
+bench-heuristics-table: $(STAMP)
+	$(BIN)/python -m gtsp_bench.heuristics_table $(TABLE_ARGS)
 
 bench-drl: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)

@@ -297,8 +297,9 @@ def check_instance_numbers(instance: Any) -> None:
     if instance.edge_weight_type == "EXPLICIT":
         check_finite_array("weight", instance.weights, MAX_TOUR_COST)
     else:
-        for k, cluster in enumerate(instance.clusters):
-            check_finite_array(f"clusters[{k}]", cluster, MAX_COORD)
+        if not np.all(np.abs(instance.coords) <= MAX_COORD):  # all at once, then name the first
+            for k, cluster in enumerate(instance.clusters):
+                check_finite_array(f"clusters[{k}]", cluster, MAX_COORD)
         if instance.depot is not None:
             check_finite_array("depot", instance.depot, MAX_COORD)
     bound = tour_cost_bound(instance)

@@ -55,7 +55,7 @@ class Reference:
         ``"optimal"`` (a proven optimum: the symmetric instances up to 442 nodes, Fischetti et al.
         1997) or ``"best_known"`` (the best tour found, not proven optimal).
     type
-        ``GTSP``, ``AGTSP`` (asymmetric: not readable by this project) or ``TSP`` as the file says.
+        ``GTSP``, ``AGTSP`` (asymmetric costs) or ``TSP`` as the file says.
     edge_weight_type, edge_weight_format
         As the file says (the format is empty for coordinate types).
     tour
@@ -79,7 +79,8 @@ class Reference:
 
     @property
     def symmetric(self) -> bool:
-        """Whether the project can read the instance (AGTSP files are asymmetric)."""
+        """Whether the instance's costs are symmetric (AGTSP files are not: only the solvers that
+        handle asymmetric costs take them, see :func:`gtsp_bench.registry.handles_asymmetric`)."""
         return self.type != "AGTSP"
 
 

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from gtsp_bench.checks import is_int
+from gtsp_bench.checks import check_memory, is_int
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.params import EnergyParams
 
@@ -55,9 +55,14 @@ class Instance:
     edge_weight_type
         ``"EUCLIDEAN"`` (exact distances, required for UAV instances) or a TSPLIB95 rule.
     weights
-        For ``"EXPLICIT"`` only: the full ``(n, n)`` weight matrix in global node order.
+        For ``"EXPLICIT"`` only: the full ``(n, n)`` weight matrix in global node order;
+        ``weights[i, j]`` is the cost of going from node i to node j.
     meta
         Free-form metadata (seed, generator settings, source file, ...).
+    symmetric
+        ``False`` for an asymmetric GTSP (a GTSPLIB ``TYPE : AGTSP`` file): only then may the
+        (``"EXPLICIT"``) weight matrix differ from its transpose, and a tour is priced in its
+        direction. A symmetric instance's matrix must equal its transpose exactly.
     """
 
     name: str
@@ -67,6 +72,7 @@ class Instance:
     edge_weight_type: str = "EUCLIDEAN"
     weights: np.ndarray | None = None
     meta: Mapping[str, Any] = field(default_factory=dict)
+    symmetric: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -81,18 +87,24 @@ class Instance:
         explicit = self.edge_weight_type == "EXPLICIT"
         if len(self.clusters) == 0:
             raise InputError("an instance needs at least one cluster")
-        clusters = []
+        arrays = []
         for k, pts in enumerate(self.clusters):
-            arr = np.array(pts, dtype=np.float64)
+            arr = np.asarray(pts, dtype=np.float64)
             if arr.size == 0:
                 raise InputError(f"cluster {k} is empty")
             if arr.ndim != 2 or arr.shape[1] != 2:
                 raise InputError(f"cluster {k} must be a list of [x, y] pairs")
-            if not explicit and not np.all(np.isfinite(arr)):
-                raise InputError(f"cluster {k} has a NaN or infinite coordinate")
-            arr.setflags(write=False)
-            clusters.append(arr)
-        object.__setattr__(self, "clusters", tuple(clusters))
+            arrays.append(arr)
+        # One copy the instance owns (read-only); the clusters are views of it, in order.
+        coords = np.concatenate(arrays)
+        if not explicit and not np.all(np.isfinite(coords)):
+            bad = np.flatnonzero(~np.isfinite(coords).all(axis=1))[0]
+            k = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), bad, side="right"))
+            raise InputError(f"cluster {k} has a NaN or infinite coordinate")
+        coords.setflags(write=False)
+        ends = np.cumsum([len(a) for a in arrays])[:-1]
+        object.__setattr__(self, "clusters", tuple(np.split(coords, ends)))
+        self.__dict__["coords"] = coords  # the cached property, already at hand
         if self.depot is not None:
             depot = _frozen_array(self.depot)
             if depot.shape != (2,):
@@ -111,9 +123,17 @@ class Instance:
                 raise InputError(f"weight matrix must be {n} x {n}, got {w.shape}")
             if not np.all(np.isfinite(w)):
                 raise InputError("weight matrix has a NaN or infinite entry")
+            if self.symmetric and not np.array_equal(w, w.T):
+                raise InputError("weight matrix is not symmetric (an asymmetric instance says "
+                                 "symmetric=False; in a GTSPLIB file, TYPE : AGTSP)")
             object.__setattr__(self, "weights", w)
         elif self.weights is not None:
             raise InputError("a weight matrix is only allowed with EXPLICIT edge weights")
+        if self.symmetric is not True:
+            if self.symmetric is not False:
+                raise InputError(f"symmetric must be True or False, got {self.symmetric!r}")
+            if not explicit:
+                raise InputError("only EXPLICIT edge weights can be asymmetric")
         object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
 
     # ------------------------------------------------------------------ shape
@@ -280,24 +300,61 @@ def _geom_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.floor(6378388.0 * np.arctan2(np.sqrt(q1 * q1 + q2 * q2), q5) + 1.0)
 
 
+#: Most nodes (the depot included) whose full ``(m, m)`` cost matrix :func:`node_distance_matrix`
+#: builds: 32,000 nodes take about 7.6 GiB of float64. Larger instances (GTSPLIB's largest have
+#: 33,810 to 85,900 nodes) are refused with one line before anything is allocated.
+MAX_MATRIX_NODES = 32_000
+#: Rows computed at once from coordinates (bounds the temporary arrays to a few tens of MB).
+_CHUNK_BYTES = 2**26
+
+
+def check_matrix_size(instance: Instance) -> None:
+    """:class:`InputError` when the full node-to-node matrix of ``instance`` is too large to build:
+    more than :data:`MAX_MATRIX_NODES` nodes, or more memory than this process has."""
+    m = instance.n_nodes + (instance.depot is not None)
+    need = 8.0 * m * m
+    if m > MAX_MATRIX_NODES:
+        raise InputError(f"{instance.name} has {m:,} nodes: its full cost matrix would need "
+                         f"{need / 2**30:.3g} GiB, and matrices are built up to {MAX_MATRIX_NODES:,} "
+                         f"nodes; this solver works on the full matrix, so the instance is too "
+                         f"large for it")
+    check_memory(f"the {m:,} x {m:,} cost matrix of {instance.name}", need, "use a smaller instance")
+
+
 def node_distance_matrix(instance: Instance) -> np.ndarray:
     """Distances between all nodes, the depot last when there is one: ``(n[+1], n[+1])``.
 
-    The diagonal is zero. For UAV instances this is the horizontal flight distance in metres.
+    ``out[i, j]`` is the cost of going from node i to node j (the transpose of it too unless the
+    instance is asymmetric). The diagonal is zero. For UAV instances this is the horizontal
+    flight distance in metres.
+
+    Raises
+    ------
+    InputError
+        When the matrix is too large (:func:`check_matrix_size`).
     """
+    check_matrix_size(instance)
     if instance.edge_weight_type == "EXPLICIT":
         w = np.array(instance.weights, dtype=np.float64)
     else:
         pts = instance.coords
         if instance.depot is not None:
             pts = np.vstack([pts, instance.depot])
-        w = pair_distances(pts[:, None, :], pts[None, :, :], instance.edge_weight_type)
+        m = len(pts)
+        w = np.empty((m, m))
+        step = max(1, _CHUNK_BYTES // (16 * max(m, 1)))
+        for lo in range(0, m, step):
+            w[lo:lo + step] = pair_distances(pts[lo:lo + step, None, :], pts[None, :, :],
+                                             instance.edge_weight_type)
     np.fill_diagonal(w, 0.0)
     return w
 
 
 def tour_length(instance: Instance, order: np.ndarray, heads: np.ndarray) -> float:
     """Length of the closed tour depot -> heads in ``order`` -> depot (no depot: a cycle).
+
+    Priced in its direction: ``order[i] -> order[i + 1]``, then the closing edge from the last
+    head back to the first (``weights[from, to]``; the same both ways on a symmetric instance).
 
     ``order`` and ``heads`` must already be checked (:meth:`Instance.check_solution`).
     """

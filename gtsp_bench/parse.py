@@ -11,7 +11,9 @@ Two instance formats:
 * GTSPLIB ``.gtsp``: TSPLIB95 plus ``TYPE : GTSP``, ``GTSP_SETS : M`` and a ``GTSP_SET_SECTION``
   of ``set_id node node ... -1`` records. Coordinate types EUC_2D, CEIL_2D, ATT, GEO, GEOM, and
   EXPLICIT weights in any TSPLIB95 ``EDGE_WEIGHT_FORMAT`` (FULL_MATRIX, UPPER_ROW, LOWER_ROW,
-  UPPER_DIAG_ROW, LOWER_DIAG_ROW and the ``_COL`` forms), symmetric only.
+  UPPER_DIAG_ROW, LOWER_DIAG_ROW and the ``_COL`` forms). ``TYPE : AGTSP`` (asymmetric) files
+  give a FULL_MATRIX whose row i, column j is the cost of going from node i to node j; they
+  become an instance with ``symmetric=False``.
 
 And TSPLIB tour files (``TOUR_SECTION`` of 1-based node ids, ``-1`` at the end), the form in which
 GTSPLIB's best tours are given: :func:`parse_tour`, then :func:`tour_to_solution`.
@@ -232,15 +234,16 @@ def parse_gtsp(text: str) -> Instance:
     Clusters keep the file's set order; the nodes of a set keep the order in which the set lists
     them. ``meta`` records the name, comment and original node ids. Explicit weights in any
     triangle format become the full matrix; the diagonal is ignored (TSPLIB95; some files put a
-    large number there) and stored as 0.
+    large number there) and stored as 0. An ``AGTSP`` file (its FULL_MATRIX may be asymmetric:
+    row = from, column = to) gives an instance with ``symmetric=False``; a symmetric type whose
+    FULL_MATRIX is not symmetric is an error.
     """
     header, sections = _tsplib_sections(text)
     # The first word: "TYPE : GTSP (M.~Hofmeister)" occurs.
     gtsp_type = (header.get("TYPE", "").split() or [""])[0].upper()
     if gtsp_type not in {"GTSP", "AGTSP"} and "GTSP_SETS" not in header:
         raise InputError("not a GTSP file (TYPE is not GTSP and there is no GTSP_SETS)")
-    if gtsp_type == "AGTSP":
-        raise InputError("asymmetric GTSP (AGTSP) is not supported")
+    symmetric = gtsp_type != "AGTSP"
     ewt = header.get("EDGE_WEIGHT_TYPE", "").upper()
     if ewt not in _COORD_TYPES | {"EXPLICIT"}:
         raise InputError(
@@ -254,11 +257,13 @@ def parse_gtsp(text: str) -> Instance:
     sets = _parse_sets(sections.get("GTSP_SET_SECTION"), dim, n_sets)
     weights = None
     if ewt == "EXPLICIT":
-        weights = _parse_weights(header, sections.get("EDGE_WEIGHT_SECTION"), dim)
+        weights = _parse_weights(header, sections.get("EDGE_WEIGHT_SECTION"), dim, symmetric)
+    elif not symmetric:
+        raise InputError(f"an asymmetric (AGTSP) file needs EXPLICIT weights, not {ewt}")
     order = np.concatenate(sets)  # original (0-based) node ids in cluster order
     if coords is None:
         coords = np.full((dim, 2), np.nan)
-    clusters = tuple(coords[s] for s in sets)
+    clusters = tuple(np.split(coords[order], np.cumsum([len(s) for s in sets])[:-1]))
     name = header.get("NAME", "gtsp")
     meta = {"format": "gtsplib", "node_ids": (order + 1).tolist()}
     if header.get("COMMENT"):
@@ -271,6 +276,7 @@ def parse_gtsp(text: str) -> Instance:
         edge_weight_type=ewt,
         weights=None if weights is None else weights[np.ix_(order, order)],
         meta=meta,
+        symmetric=symmetric,
     )
     check_instance_numbers(instance)
     return instance
@@ -293,6 +299,9 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
         if ewt == "EXPLICIT":
             return None
         raise InputError("missing NODE_COORD_SECTION")
+    fast = _coords_fast(lines, dim)
+    if fast is not None:
+        return fast
     points: dict[int, tuple[float, float]] = {}
     for line in lines:
         parts = line.split()
@@ -314,6 +323,27 @@ def _parse_coords(lines: list[str] | None, dim: int, ewt: str) -> np.ndarray | N
     return coords
 
 
+def _coords_fast(lines: list[str], dim: int) -> np.ndarray | None:
+    """The coordinates of well-formed lines ``node x y`` (each node 1..dim once, finite values),
+    vectorised; ``None`` for anything else, which the line-by-line reader then names."""
+    tokens = " ".join(lines).split()
+    if len(lines) != dim or len(tokens) != 3 * dim:
+        return None
+    try:
+        table = np.array(tokens, dtype=np.float64).reshape(dim, 3)
+    except ValueError:
+        return None
+    ids = table[:, 0]
+    if not (np.all(ids == np.round(ids)) and np.all(np.isfinite(table[:, 1:]))):
+        return None
+    nodes = ids.astype(np.int64)
+    if nodes.min() < 1 or nodes.max() > dim or np.bincount(nodes).max() > 1:
+        return None
+    coords = np.empty((dim, 2))
+    coords[nodes - 1] = table[:, 1:]
+    return coords
+
+
 def _first_missing(present: Iterable[int]) -> int:
     """The smallest id >= 1 that is not in ``present``."""
     ids = sorted(present)
@@ -326,6 +356,9 @@ def _first_missing(present: Iterable[int]) -> int:
 def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarray]:
     if lines is None:
         raise InputError("missing GTSP_SET_SECTION")
+    fast = _sets_fast(lines, dim, n_sets)
+    if fast is not None:
+        return fast
     tokens: list[int] = []
     for line in lines:
         try:
@@ -363,12 +396,41 @@ def _parse_sets(lines: list[str] | None, dim: int, n_sets: int) -> list[np.ndarr
     return [np.array(sets[s]) for s in sorted(sets)]
 
 
-def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int) -> np.ndarray:
-    """The full symmetric ``(dim, dim)`` matrix of an EDGE_WEIGHT_SECTION, zero diagonal."""
+def _sets_fast(lines: list[str], dim: int, n_sets: int) -> list[np.ndarray] | None:
+    """The sets of a well-formed GTSP_SET_SECTION (``n_sets`` records ``id node ... -1`` with
+    distinct ids, every node 1..dim in exactly one), vectorised and by set id; ``None`` for
+    anything else, which the record-by-record reader then names."""
+    try:
+        tokens = np.array(" ".join(lines).split(), dtype=np.int64)
+    except (ValueError, OverflowError):
+        return None
+    ends = np.flatnonzero(tokens == -1)
+    if len(ends) != n_sets or len(tokens) == 0 or ends[-1] != len(tokens) - 1:
+        return None
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    ids = tokens[starts]
+    is_member = np.ones(len(tokens), dtype=bool)
+    is_member[starts] = False
+    is_member[ends] = False
+    members = tokens[is_member]
+    if (np.any(ends - starts < 2) or len(members) != dim or members.min() < 1
+            or members.max() > dim or np.bincount(members).max() > 1
+            or len(set(ids.tolist())) != n_sets):
+        return None
+    by_id = np.argsort(ids, kind="stable")
+    return [tokens[starts[i] + 1:ends[i]] - 1 for i in by_id]
+
+
+def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int,
+                   symmetric: bool = True) -> np.ndarray:
+    """The full ``(dim, dim)`` matrix of an EDGE_WEIGHT_SECTION, zero diagonal; row = from,
+    column = to. Only a FULL_MATRIX can be asymmetric, and only when ``symmetric`` is false."""
     fmt = header.get("EDGE_WEIGHT_FORMAT", "").upper()
     if fmt not in _WEIGHT_FORMATS:
         raise InputError(f"unsupported EDGE_WEIGHT_FORMAT {fmt or '(missing)'!r} "
                          f"(supported: {', '.join(_WEIGHT_FORMATS)})")
+    if not symmetric and fmt != "FULL_MATRIX":
+        raise InputError(f"an asymmetric (AGTSP) file needs EDGE_WEIGHT_FORMAT FULL_MATRIX, not {fmt}")
     if lines is None:
         raise InputError("missing EDGE_WEIGHT_SECTION")
     try:
@@ -392,8 +454,10 @@ def _parse_weights(header: Mapping[str, str], lines: list[str] | None, dim: int)
         w[cols, rows] = values
     np.fill_diagonal(w, 0.0)
     check_finite_array("EDGE_WEIGHT_SECTION", w, MAX_TOUR_COST)  # before symmetry: nan != nan
-    if fmt == "FULL_MATRIX" and not np.allclose(w, w.T):  # a triangle is symmetric as built
-        raise InputError("EDGE_WEIGHT_SECTION is not symmetric (asymmetric GTSP is not supported)")
+    if symmetric and fmt == "FULL_MATRIX" and not np.array_equal(w, w.T):  # a triangle is symmetric
+        i, j = (int(v) for v in np.argwhere(w != w.T)[0])
+        raise InputError(f"EDGE_WEIGHT_SECTION is not symmetric (node {i + 1} to {j + 1} weighs "
+                         f"{w[i, j]:g}, back {w[j, i]:g}); an asymmetric file says TYPE : AGTSP")
     return w
 
 
@@ -402,7 +466,7 @@ def format_gtsp(instance: Instance) -> str:
     if instance.params is not None:
         raise InputError(f"{instance.name} is a UAV instance; write it as .json")
     ewt = instance.edge_weight_type
-    lines = [f"NAME : {instance.name}", "TYPE : GTSP"]
+    lines = [f"NAME : {instance.name}", f"TYPE : {'GTSP' if instance.symmetric else 'AGTSP'}"]
     if instance.meta.get("comment"):
         lines.append(f"COMMENT : {instance.meta['comment']}")
     lines += [f"DIMENSION : {instance.n_nodes}", f"GTSP_SETS : {instance.n_clusters}",

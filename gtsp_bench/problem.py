@@ -1,8 +1,9 @@
 """A GTSP priced for one omega: what most solvers work on.
 
 :func:`price` turns an :class:`~gtsp_bench.instance.Instance` and a weight ``omega`` into a
-:class:`Problem`: a cost per node and a symmetric cost per edge, with the depot (when there is one)
-as an extra one-node cluster. The cost of a closed tour through one node per cluster,
+:class:`Problem`: a cost per node and a cost per edge, ``edge_cost[i, j]`` for going from i to j
+(symmetric unless the instance is asymmetric: :attr:`Problem.symmetric`), with the depot (when
+there is one) as an extra one-node cluster. The cost of a closed tour through one node per cluster,
 
     sum of node costs + sum of edge costs,
 
@@ -41,7 +42,8 @@ class Problem:
         ``(m,)`` cost of choosing each node; node ids are the instance's global ids, and the
         depot, if any, is node ``m - 1`` with cost 0.
     edge_cost
-        ``(m, m)`` symmetric edge costs, zero diagonal.
+        ``(m, m)`` edge costs, zero diagonal: ``edge_cost[i, j]`` is the cost of going from node i
+        to node j, equal to ``edge_cost[j, i]`` unless :attr:`symmetric` is false.
     clusters
         Node ids of each GTSP cluster: the K instance clusters in order, then ``[depot]``.
     depot
@@ -54,6 +56,12 @@ class Problem:
     edge_cost: np.ndarray
     clusters: tuple[np.ndarray, ...]
     depot: int | None
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether ``edge_cost`` equals its transpose (false for an asymmetric instance, e.g. a
+        GTSPLIB ``AGTSP`` file: a tour and its reverse may then cost differently)."""
+        return self.instance.symmetric
 
     @property
     def n_nodes(self) -> int:
@@ -74,7 +82,8 @@ class Problem:
         return out
 
     def tour_cost(self, tour: Sequence[int]) -> float:
-        """Cost of the closed tour through ``tour`` (node ids, one per cluster, any rotation)."""
+        """Cost of the closed tour through ``tour`` (node ids, one per cluster, any rotation), in
+        its direction: ``tour[i] -> tour[i + 1]``, then ``tour[-1] -> tour[0]``."""
         t = np.asarray(tour, dtype=np.int64)
         return float(self.node_cost[t].sum() + self.edge_cost[t, np.roll(t, -1)].sum())
 
@@ -117,7 +126,8 @@ def price(instance: Instance, omega: float | None) -> Problem:
     Raises
     ------
     InputError
-        If ``omega`` is not in [0, 1] for a UAV instance.
+        If ``omega`` is not in [0, 1] for a UAV instance, or the instance is too large for a full
+        cost matrix (:func:`gtsp_bench.instance.check_matrix_size`).
     """
     dist = node_distance_matrix(instance)
     n = instance.n_nodes

@@ -5,6 +5,11 @@ A solver is any class with a ``solve`` method (the :class:`Solver` protocol) ret
 ``"module:Class"`` string so that heavy imports (torch, ortools, ...) happen only when it is used.
 :func:`run_solver` times a solve, then re-checks and re-prices the solution with the one evaluator
 (:func:`gtsp_bench.energy.evaluate`): a solver never reports its own number unchecked.
+
+Asymmetric costs (a GTSPLIB ``AGTSP`` file, ``Instance.symmetric`` false) are part of the problem
+model, but a solver takes them only when its class says so with ``asymmetric = True``
+(:func:`handles_asymmetric`; absent means ``False``): :func:`run_solver` refuses an asymmetric
+instance for any other solver with one :class:`InputError` line, before it runs.
 """
 
 from __future__ import annotations
@@ -65,7 +70,10 @@ class Solver(Protocol):
     """The solver interface: one method.
 
     ``time_limit`` is in seconds (``None``: the solver's own default); ``seed`` makes a randomised
-    solver reproducible. ``omega`` is ``None`` for distance-only instances.
+    solver reproducible. ``omega`` is ``None`` for distance-only instances. A class attribute
+    ``asymmetric = True`` (not part of the protocol; absent means ``False``) declares that the
+    solver prices a tour in its direction and so may be given asymmetric instances (on the class
+    itself: :func:`handles_asymmetric`).
     """
 
     def solve(
@@ -342,6 +350,25 @@ def get_solver(name: str, **options: Any) -> Solver:
 
 
 # ---------------------------------------------------------------------- harness
+def handles_asymmetric(solver: object) -> bool:
+    """Whether a solver (object or class) declares ``asymmetric = True``: it takes asymmetric
+    costs (``edge_cost[i, j] != edge_cost[j, i]``) and prices every tour in its direction.
+
+    The class must declare it itself: the claim is not inherited, so a subclass that adds a step
+    (``greedy+ls`` over ``greedy``, whose 2-opt reversals assume symmetric costs) is refused
+    until it says ``asymmetric = True`` too.
+    """
+    cls = solver if inspect.isclass(solver) else type(solver)
+    return vars(cls).get("asymmetric", False) is True
+
+
+def check_capability(solver: object, name: str, instance: Instance) -> None:
+    """:class:`InputError` (one line) when ``instance`` is asymmetric and the solver does not
+    declare that it handles asymmetric costs."""
+    if not instance.symmetric and not handles_asymmetric(solver):
+        raise InputError(f"{name} handles symmetric costs only (this instance is asymmetric)")
+
+
 def run_solver(
     solver: Solver | str,
     instance: Instance,
@@ -371,7 +398,8 @@ def run_solver(
     Raises
     ------
     InputError
-        Bad omega, time limit or seed, or an unknown solver name.
+        Bad omega, time limit or seed, an unknown solver name, or an asymmetric instance for a
+        solver that handles symmetric costs only (:func:`check_capability`).
     SolverError
         The solver failed, or returned an infeasible solution, an unknown status, a claimed
         objective the evaluator does not confirm, or a lower bound above the objective.
@@ -383,6 +411,7 @@ def run_solver(
     w = check_omega(omega) if instance.is_uav else None
     time_limit = check_time_limit(time_limit)
     check_seed(seed)
+    check_capability(solver, name, instance)
     start = time.perf_counter()
     sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
     runtime = time.perf_counter() - start

@@ -26,7 +26,7 @@ def test_asymmetric_costs_are_refused():
     """An EXPLICIT instance with asymmetric weights is refused with a clear message."""
     w = np.array([[0, 1, 2, 3], [5, 0, 1, 2], [2, 1, 0, 1], [3, 2, 1, 0]], dtype=float)
     inst = Instance(name="asym", clusters=tuple(np.zeros((1, 2)) for _ in range(4)), params=None,
-                    edge_weight_type="EXPLICIT", weights=w)
+                    edge_weight_type="EXPLICIT", weights=w, symmetric=False)
     with pytest.raises(InputError, match="not symmetric"):
         check_symmetric(price(inst, None))
 

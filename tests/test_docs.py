@@ -90,6 +90,8 @@ def test_docs_tables_are_generated_from_the_committed_results():
     found = 0
     for page in sorted((REPO / "docs").rglob("*.md")):
         for name, body in _BLOCK.findall(page.read_text(encoding="utf-8")):
+            if name == "heuristics-table":  # made by make bench-heuristics-table (its own test)
+                continue
             assert name in DOCS_BLOCKS, f"{page.name}: block {name!r} is not a docs block"
             assert body == blocks[name], f"{page.name}: block {name!r} is stale; run " \
                 "gtsp-bench bench --report-only"

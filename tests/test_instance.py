@@ -105,3 +105,45 @@ def test_tour_length_without_depot_is_a_cycle():
     inst = Instance(name="c", clusters=(np.array([[0.0, 0.0]]), np.array([[3.0, 4.0]]),
                                          np.array([[3.0, 0.0]])), params=None)
     assert tour_length(inst, np.array([0, 1, 2]), np.array([0, 0, 0])) == pytest.approx(12.0)
+
+
+def test_distance_matrix_in_row_chunks_is_the_broadcast_one(monkeypatch):
+    """Filled a few rows at a time, the matrix is exactly the all-pairs broadcast."""
+    import gtsp_bench.instance as instance_module
+
+    rng = np.random.default_rng(3)
+    inst = Instance(name="chunks", clusters=tuple(rng.uniform(0, 1000, (5, 2)) for _ in range(7)),
+                    depot=np.array([500.0, 0.0]))
+    monkeypatch.setattr(instance_module, "_CHUNK_BYTES", 16 * 36 * 3)  # three rows at a time
+    pts = np.vstack([inst.coords, inst.depot])
+    want = pair_distances(pts[:, None, :], pts[None, :, :], "EUCLIDEAN")
+    np.fill_diagonal(want, 0.0)
+    assert np.array_equal(node_distance_matrix(inst), want)
+
+
+def test_a_matrix_too_large_is_refused_before_allocating():
+    """An instance above MAX_MATRIX_NODES nodes: one InputError line naming the size, no matrix."""
+    from gtsp_bench.instance import MAX_MATRIX_NODES
+    from gtsp_bench.problem import price
+
+    n = MAX_MATRIX_NODES + 1
+    inst = Instance(name="huge", clusters=(np.zeros((n, 2)),), params=None, edge_weight_type="EUC_2D")
+    with pytest.raises(InputError, match=rf"^huge has {n:,} nodes: its full cost matrix would need 7.63 GiB"):
+        price(inst, None)
+
+
+def test_asymmetric_weights_need_the_flag():
+    """Only symmetric=False admits a matrix that differs from its transpose, and only EXPLICIT
+    weights can be asymmetric; the tour is priced in its direction."""
+    w = np.array([[0.0, 1.0, 5.0], [7.0, 0.0, 2.0], [3.0, 11.0, 0.0]])
+    clusters = tuple(np.full((1, 2), np.nan) for _ in range(3))
+    with pytest.raises(InputError, match=r"^weight matrix is not symmetric"):
+        Instance(name="a", clusters=clusters, params=None, edge_weight_type="EXPLICIT", weights=w)
+    with pytest.raises(InputError, match="only EXPLICIT edge weights can be asymmetric"):
+        Instance(name="a", clusters=(np.zeros((2, 2)),), params=None, edge_weight_type="EUC_2D",
+                 symmetric=False)
+    inst = Instance(name="a", clusters=clusters, params=None, edge_weight_type="EXPLICIT", weights=w,
+                    symmetric=False)
+    there = tour_length(inst, np.array([0, 1, 2]), np.zeros(3, dtype=np.int64))
+    back = tour_length(inst, np.array([0, 2, 1]), np.zeros(3, dtype=np.int64))
+    assert (there, back) == (1.0 + 2.0 + 3.0, 5.0 + 11.0 + 7.0)

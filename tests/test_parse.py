@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.parse import (
     format_gtsp,
@@ -242,8 +243,17 @@ def test_bad_explicit_weights(fmt, values, message):
         parse_gtsp(_explicit(fmt, values))
 
 
+# An asymmetric 4 x 4 matrix (row = from, column = to), with a large diagonal as AGTSP files have.
+ASYMMETRIC = [[9999, 1, 2, 3], [9, 9999, 4, 5], [2, 7, 9999, 6], [3, 5, 8, 9999]]
+
+
+def _agtsp(type_line: str, fmt: str = "FULL_MATRIX") -> str:
+    values = [v for row in ASYMMETRIC for v in row]
+    return _explicit(fmt, values).replace("TYPE: GTSP", type_line)
+
+
 @pytest.mark.parametrize(
-    ("line", "accepted"),
+    ("line", "symmetric"),
     [
         ("TYPE: GTSP", True),
         ("TYPE : GTSP (M.~Hofmeister)", True),   # a comment after the type
@@ -253,14 +263,50 @@ def test_bad_explicit_weights(fmt, values, message):
         ("TYPE:  AGTSP", False),
     ],
 )
-def test_type_line_variants(line, accepted):
-    """GTSPLIB's TYPE lines as they occur; every form of AGTSP is refused by name."""
-    text = SMALL.replace("TYPE: GTSP", line)
-    if accepted:
-        assert parse_gtsp(text).n_clusters == 2
+def test_type_line_variants(line, symmetric):
+    """GTSPLIB's TYPE lines as they occur; every form of AGTSP gives an asymmetric instance."""
+    if symmetric:
+        inst = parse_gtsp(SMALL.replace("TYPE: GTSP", line))
+        assert inst.n_clusters == 2 and inst.symmetric
     else:
-        with pytest.raises(InputError, match=r"asymmetric GTSP \(AGTSP\) is not supported"):
-            parse_gtsp(text)
+        inst = parse_gtsp(_agtsp(line))
+        assert not inst.symmetric
+        assert inst.weights.tolist() == [[0, 1, 2, 3], [9, 0, 4, 5], [2, 7, 0, 6], [3, 5, 8, 0]]
+
+
+def test_asymmetric_matrix_keeps_its_direction():
+    """Row = from, column = to, also after the nodes are reordered into cluster order."""
+    text = _agtsp("TYPE: AGTSP").replace("1 1 2 -1\n2 3 4 -1", "1 2 1 -1\n2 4 3 -1")
+    inst = parse_gtsp(text)
+    assert inst.meta["node_ids"] == [2, 1, 4, 3]
+    w = inst.weights
+    assert (w[0, 1], w[1, 0]) == (ASYMMETRIC[1][0], ASYMMETRIC[0][1])  # node 2 -> 1, node 1 -> 2
+    assert (w[2, 3], w[3, 2]) == (ASYMMETRIC[3][2], ASYMMETRIC[2][3])  # node 4 -> 3, node 3 -> 4
+    order, heads = tour_to_solution(inst, [2, 3])
+    assert evaluate(inst, None, order, heads).objective == ASYMMETRIC[1][2] + ASYMMETRIC[2][1]
+
+
+def test_asymmetric_round_trip():
+    """format_gtsp writes TYPE : AGTSP and the full matrix; reading it back gives the same costs."""
+    inst = parse_gtsp(_agtsp("TYPE : AGTSP"))
+    again = parse_gtsp(format_gtsp(inst))
+    assert not again.symmetric and again.weights.tolist() == inst.weights.tolist()
+    assert "TYPE : AGTSP" in format_gtsp(inst)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (_agtsp("TYPE: AGTSP", "UPPER_ROW"), r"\(AGTSP\) file needs EDGE_WEIGHT_FORMAT FULL_MATRIX"),
+        (SMALL.replace("TYPE: GTSP", "TYPE: AGTSP"), r"\(AGTSP\) file needs EXPLICIT weights"),
+        (_agtsp("TYPE: GTSP"), r"not symmetric \(node 1 to 2 weighs 1, back 9\); an asymmetric file says "
+                               "TYPE : AGTSP"),
+    ],
+)
+def test_asymmetric_input_errors(text, message):
+    """AGTSP needs a full explicit matrix; a symmetric type with an asymmetric matrix is refused."""
+    with pytest.raises(InputError, match=message):
+        parse_gtsp(text)
 
 
 def test_geom_is_a_coordinate_type():

@@ -8,6 +8,7 @@ import pytest
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 
@@ -58,3 +59,17 @@ def test_to_solution_rejects_bad_tours(tiny):
         problem.to_solution([3, 1, 2])  # two nodes of cluster 1, none of cluster 0
     with pytest.raises(InfeasibleSolutionError):
         problem.to_solution([3, 0, 9])
+
+
+def test_asymmetric_problem_keeps_the_direction():
+    """An asymmetric instance prices to an asymmetric edge_cost (row = from) with symmetric False;
+    tour_cost follows the tour's direction, as the evaluator does."""
+    w = np.array([[0.0, 1.0, 5.0], [7.0, 0.0, 2.0], [3.0, 11.0, 0.0]])
+    inst = Instance(name="a", clusters=tuple(np.full((1, 2), np.nan) for _ in range(3)), params=None,
+                    edge_weight_type="EXPLICIT", weights=w, symmetric=False)
+    p = price(inst, None)
+    assert not p.symmetric and np.array_equal(p.edge_cost, w)
+    assert p.tour_cost([0, 1, 2]) == 6.0 == evaluate(inst, None, [0, 1, 2], [0, 0, 0]).objective
+    assert p.tour_cost([0, 2, 1]) == 23.0 == evaluate(inst, None, [0, 2, 1], [0, 0, 0]).objective
+    assert price(Instance(name="s", clusters=(np.zeros((2, 2)),), params=None,
+                          edge_weight_type="EUC_2D"), None).symmetric

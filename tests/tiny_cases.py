@@ -25,3 +25,18 @@ def tiny_case(seed: int, depot: bool = True) -> tuple[Instance, float, float]:
                     clusters=tuple(c[:s] for c, s in zip(base.clusters, sizes, strict=True)))
     omega = float(rng.uniform())
     return inst, omega, run_solver("brute", inst, omega).objective
+
+
+@cache
+def tiny_asymmetric_case(seed: int) -> tuple[Instance, float]:
+    """``(instance, optimum)``: an asymmetric GTSP (as an AGTSP file), K in 3..6 clusters of 1 to
+    3 nodes, arc costs drawn independently in each direction (real numbers: no ties)."""
+    rng = np.random.default_rng([seed, 7])
+    k = int(rng.integers(3, 7))
+    sizes = rng.integers(1, 4, size=k)
+    n = int(sizes.sum())
+    w = np.round(rng.uniform(1.0, 1000.0, size=(n, n)), 3)
+    np.fill_diagonal(w, 0.0)
+    inst = Instance(name=f"tiny-asym-{seed}", clusters=tuple(np.full((s, 2), np.nan) for s in sizes),
+                    params=None, edge_weight_type="EXPLICIT", weights=w, symmetric=False)
+    return inst, run_solver("brute", inst, None).objective

@@ -37,6 +37,9 @@ class Brute:
         Refuse instances with more candidate tours than this.
     """
 
+    #: Prices every tour in its direction (see :func:`gtsp_bench.registry.handles_asymmetric`).
+    asymmetric = True
+
     def __init__(self, max_tours: int = MAX_TOURS) -> None:
         self.max_tours = check_int("max_tours", max_tours, 1)
 

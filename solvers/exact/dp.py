@@ -88,6 +88,9 @@ class DynamicProgramming:
         Refuse instances whose table needs more memory than this (GiB).
     """
 
+    #: Directed transitions ``edge[last, next]`` and closing ``edge[last, start]``: asymmetric costs.
+    asymmetric = True
+
     def __init__(self, max_memory_gb: float = 2.0) -> None:
         self.max_memory_gb = check_float("max_memory_gb", max_memory_gb, 0.0, math.inf)
 

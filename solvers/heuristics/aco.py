@@ -123,6 +123,10 @@ class Aco:
         Pheromone an ant deposits, divided by its tour's cost (> 0).
     """
 
+    #: Ants move along directed arcs and tours are priced in their direction (the pheromone is
+    #: laid both ways, a choice that is only a heuristic's on asymmetric costs).
+    asymmetric = True
+
     #: Whether the shared local search polishes the best tour (``aco+ls``).
     local_search = False
 

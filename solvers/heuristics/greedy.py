@@ -32,6 +32,9 @@ def greedy_tour(problem: Problem, start: int) -> np.ndarray:
 class Greedy:
     """Nearest (cluster, head) pair by weighted energy, step by step."""
 
+    #: Each step takes the cheapest arc *from* the current node: asymmetric costs work as they are.
+    asymmetric = True
+
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
         seed: int = 0,

@@ -179,7 +179,8 @@ def scaled_weights(problem: Problem, limit: int | None = None) -> tuple[np.ndarr
     else:  # rounding adds at most 1/2 per cluster to the sum, 1/2 to the largest arc
         scale = (limit - 1 - (k + 1) / 2) / span if span > 0 else 1.0
     top = float(w.max())
-    if not (math.isfinite(scale) and scale > 0 and top * scale >= MIN_UNITS) and top > 0:
+    rounds = scale != 1.0  # whole numbers that fit are used as they are, however small
+    if rounds and not (math.isfinite(scale) and scale > 0 and top * scale >= MIN_UNITS) and top > 0:
         raise InputError(f"lkh: {name} cannot be scaled to LKH's integer weights: all of them, "
                          f"big-M included, must stay below {limit:.3g}, which leaves its largest "
                          f"arc fewer than {MIN_UNITS} units; use another solver")
@@ -203,6 +204,9 @@ class LKH:
         LKH's ``SUBGRADIENT``: ``False`` skips the subgradient ascent (candidate sets from the raw
         weights): much less preprocessing, better on our energy instances, worse on GTSPLIB.
     """
+
+    #: Noon-Bean already makes a directed (ATSP) problem: asymmetric costs go in as they are.
+    asymmetric = True
 
     def __init__(self, runs: int = 1, max_trials: int | None = None, subgradient: bool = True) -> None:
         self.runs = check_int("runs", runs, 1)
@@ -270,6 +274,6 @@ def _tiny(problem: Problem) -> np.ndarray:
         return nodes[[int(np.argmin(problem.node_cost[nodes]))]]
     a, b = problem.clusters
     cost = (problem.node_cost[a][:, None] + problem.node_cost[b][None, :]
-            + 2 * problem.edge_cost[np.ix_(a, b)])
+            + problem.edge_cost[np.ix_(a, b)] + problem.edge_cost[np.ix_(b, a)].T)  # there and back
     i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
     return np.array([a[i], b[j]])

@@ -273,6 +273,9 @@ class OrToolsPeer:
         guided local search). A run stopped this way is reproducible.
     """
 
+    #: The transit matrix is directed (row = from, column = to).
+    asymmetric = True
+
     def __init__(
         self, first_solution: str = "PATH_CHEAPEST_ARC", metaheuristic: str = "GUIDED_LOCAL_SEARCH",
         resolution: float = RESOLUTION, solution_limit: int | None = None,

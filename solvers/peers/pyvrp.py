@@ -60,6 +60,9 @@ class PyVRPPeer:
         costs are already whole numbers.
     """
 
+    #: PyVRP's distance matrix is directed (row = from, column = to).
+    asymmetric = True
+
     def __init__(self, no_improvement: int = 2_000, resolution: float = RESOLUTION) -> None:
         self.no_improvement = check_int("no_improvement", no_improvement, 1)
         self.resolution = check_float("resolution", resolution, 0.0, float(MAX_EXACT))

@@ -1,0 +1,300 @@
+"""The table of heuristics and peers: GTSPLIB by size and generated UAV instances of large K.
+
+``make bench-heuristics-table`` (``python -m gtsp_bench.heuristics_table``) runs every heuristic
+and peer (:data:`SOLVERS`) with one time budget per solve on
+
+* GTSPLIB, grouped by size (:data:`GTSPLIB_GROUPS`, the smallest ``--per-group`` instances of each
+  group, in the order of ``best_known.csv``), against the best-known value; the asymmetric (AGTSP)
+  files are a group of their own, refused by the solvers that handle symmetric costs only;
+* generated UAV instances of K = 20, 50, 100, 200 clusters of 20 nodes at one omega, against the
+  best tour any solver found for the instance (no exact optimum is in reach at these sizes). The
+  square area grows with K (:func:`uav_area`) so that the clusters cover at most a quarter of it
+  (the generator places at most :data:`~gtsp_bench.generator.MAX_COVER` of an area).
+
+It writes one CSV row per solve (``--csv``, default ``benchmarks/heuristics-table.csv``, committed
+with the page) and the Markdown table, with the command that made it, into the generated block
+``heuristics-table`` of ``docs/solvers/heuristics.md`` (the mechanism of
+:func:`gtsp_bench.report.refresh_blocks`); the block's table is what :func:`markdown` makes of the
+CSV's rows (:func:`read_rows`), which the tests check. A cell is the mean gap in percent and the median solve
+time; ``*`` when a solve stopped at the time limit; ``refused`` or ``failed`` when no solve of
+the cell gave an answer (a partly answered cell counts only its answers and says ``n/m``).
+Timings are wall-clock, of one run on whatever machine runs it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shlex
+import statistics
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from gtsp_bench.checks import check_float, check_int, check_omega, check_seed, parse_ks
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import DEFAULT_AREA, DEFAULT_ZETA, generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.tables import Row, solve, write_csv
+
+#: The heuristics and peers of the table, in its column order.
+SOLVERS = ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp", "ortools", "lkh")
+#: GTSPLIB groups of symmetric instances: (label, fewest nodes, most nodes).
+GTSPLIB_GROUPS = (
+    ("GTSPLIB <= 200 nodes", 1, 200),
+    ("GTSPLIB 201-500", 201, 500),
+    ("GTSPLIB 501-1,100", 501, 1_100),
+    ("GTSPLIB 1,101-15,000", 1_101, 15_000),
+)
+#: The group of the asymmetric GTSPLIB files.
+AGTSP_GROUP = "GTSPLIB AGTSP"
+#: Cluster counts of the generated UAV instances (20 nodes each).
+UAV_KS = (20, 50, 100, 200)
+#: Largest share of the area the generated clusters cover.
+UAV_COVER = 0.25
+#: The page and the name of the generated block the table goes to.
+DOCS_PAGE = Path("docs") / "solvers" / "heuristics.md"
+BLOCK = "heuristics-table"
+#: The rows of the table in the page (committed with it).
+DEFAULT_CSV = Path("benchmarks") / "heuristics-table.csv"
+COLUMNS = ("group", "instance", "solver", "status", "objective", "reference", "reference_kind",
+           "gap_percent", "runtime_s", "note")
+_NO_ANSWER = ("failed", "refused")
+
+
+@dataclass(frozen=True)
+class TableConfig:
+    """What one run of the table does (see :func:`main` for the options)."""
+
+    solvers: tuple[str, ...] = SOLVERS
+    time_limit: float = 10.0
+    per_group: int = 3
+    uav_ks: tuple[int, ...] = UAV_KS
+    uav_instances: int = 3
+    omega: float = 0.5
+    set_seed: int = 0
+    solver_seed: int = 0
+    gtsplib: bool = True
+    agtsp: bool = True
+    max_nodes: int = 15_000
+    csv: Path = DEFAULT_CSV
+    docs: Path | None = DOCS_PAGE
+
+
+def uav_area(k: int, zeta: float = DEFAULT_ZETA) -> float:
+    """Side of the square area (m) for K clusters: the default 1,000 m, or more, in whole 100 m,
+    so that the clusters' squares cover at most :data:`UAV_COVER` of it."""
+    need = math.sqrt(k * (2 * zeta) ** 2 / UAV_COVER)
+    return max(DEFAULT_AREA, 100.0 * math.ceil(need / 100.0))
+
+
+def uav_instances(k: int, n: int, seed: int) -> list[Instance]:
+    """``n`` seeded UAV instances of K clusters of 20 nodes (instance i: seed ``[seed, K, i]``), the
+    depot at the middle of the area's lower edge, as the default one."""
+    area = uav_area(k)
+    return [generate_instance(k, 20, [seed, k, i], area=area, depot=(area / 2, 0.0),
+                              name=f"uav-K{k}-N20-a{area:g}-s{seed}-{i:03d}") for i in range(n)]
+
+
+def gtsplib_instances(config: TableConfig) -> list[tuple[str, Instance, float]]:
+    """``(group, instance, best known)``: the first ``per_group`` instances of each size group
+    (and of the AGTSP files), up to ``max_nodes`` nodes."""
+    from gtsp_bench import gtsplib
+
+    refs = list(gtsplib.best_known().values())
+    out = []
+    for label, lo, hi in GTSPLIB_GROUPS:
+        picked = [r for r in refs if r.symmetric and lo <= r.nodes <= min(hi, config.max_nodes)]
+        out += [(label, r.name, r.value) for r in picked[:config.per_group]]
+    if config.agtsp:
+        picked = [r for r in refs if not r.symmetric and r.nodes <= config.max_nodes]
+        out += [(AGTSP_GROUP, r.name, r.value) for r in picked[:config.per_group]]
+    return [(group, gtsplib.read(name), value) for group, name, value in out]
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def _solve_all(config: TableConfig, group: str, inst: Instance, omega: float | None) -> list[Row]:
+    rows = []
+    for s in config.solvers:
+        r = solve(group, inst, omega, s, config.time_limit, config.solver_seed)
+        what = r.note if r.status in _NO_ANSWER else f"{r.objective:.6g} in {r.runtime_s:.2f} s"
+        _say(f"  {inst.name} {s}: {r.status} {what}")
+        rows.append(r)
+    return rows
+
+
+def run_table(config: TableConfig) -> list[Row]:
+    """Every solver on every instance of the table; each row with its reference."""
+    rows: list[Row] = []
+    if config.gtsplib:
+        for group, inst, best in gtsplib_instances(config):
+            rows += [r.against(best, "best known") for r in _solve_all(config, group, inst, None)]
+    for k in config.uav_ks:
+        for inst in uav_instances(k, config.uav_instances, config.set_seed):
+            found = _solve_all(config, f"UAV K={k}", inst, config.omega)
+            best = min((r.objective for r in found if r.status not in _NO_ANSWER), default=math.nan)
+            rows += [r.against(best, "best found") for r in found]
+    return rows
+
+
+def cell(rows: Sequence[Row]) -> str:
+    """One table cell: mean gap and median time of the answered solves (``*``: a solve stopped
+    at the limit; ``n/m``: only n of m solves answered), else why none did."""
+    answered = [r for r in rows if r.status not in _NO_ANSWER]
+    if not answered:
+        return "refused" if all(r.status == "refused" for r in rows) else "failed"
+    gap = statistics.fmean(r.gap for r in answered)
+    median = statistics.median(r.runtime_s for r in answered)
+    star = "*" if any(r.status == "time_limit" for r in answered) else ""
+    part = f" ({len(answered)}/{len(rows)})" if len(answered) < len(rows) else ""
+    return f"{gap:.2f}% {median:.2f}s{star}{part}"
+
+
+def markdown(rows: Sequence[Row], solvers: Sequence[str]) -> str:
+    """The Markdown table: one line per group, one column per solver."""
+    groups: dict[str, list[Row]] = {}
+    for r in rows:
+        groups.setdefault(r.group, []).append(r)
+    lines = ["| group | instances | reference | " + " | ".join(solvers) + " |",
+             "|---|---:|---|" + "---:|" * len(solvers)]
+    for group, rs in groups.items():
+        names = dict.fromkeys(r.instance for r in rs)
+        cells = [cell([r for r in rs if r.solver == s]) if any(r.solver == s for r in rs) else "-"
+                 for s in solvers]
+        lines.append(f"| {group} | {len(names)} | {rs[0].reference_kind} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def block_text(rows: Sequence[Row], config: TableConfig, command: str, wall_s: float) -> str:
+    """The generated block: how it was made, the table, and which instances each group holds."""
+    groups: dict[str, list[str]] = {}
+    for r in rows:
+        names = groups.setdefault(r.group, [])
+        if r.instance not in names:
+            names.append(r.instance)
+    listing = "\n".join(f"- {g}: {', '.join(n)}" for g, n in groups.items())
+    return (f"Made by `{command}` on {time.strftime('%Y-%m-%d')}: {config.time_limit:g} s per solve, "
+            f"solver seed {config.solver_seed}, omega {config.omega:g} on the UAV instances, "
+            f"{os.cpu_count()} CPU cores, {wall_s / 60:.0f} min in all.\n\n"
+            f"{markdown(rows, config.solvers)}\n\n"
+            f"Cells: mean gap to the reference / median solve time; `*`: some solves stopped at the "
+            f"time limit; `(n/m)`: only n of m solves answered; `refused`: the solver declines the "
+            f"instances by design (asymmetric costs for a symmetric-only solver, a matrix too "
+            f"large).\n\n{listing}")
+
+
+def write_outputs(rows: Sequence[Row], config: TableConfig, command: str, wall_s: float) -> Path:
+    """The CSV rows and, when ``config.docs`` is set, the page's generated block; the CSV path."""
+    from gtsp_bench.report import refresh_blocks
+
+    path = write_csv(config.csv, COLUMNS, (
+        [r.group, r.instance, r.solver, r.status, repr(r.objective), repr(r.reference),
+         r.reference_kind, f"{r.gap:.6f}" if math.isfinite(r.gap) else "", f"{r.runtime_s:.4f}",
+         r.note] for r in rows))
+    if config.docs is not None:
+        if not config.docs.is_file():
+            raise InputError(f"{config.docs}: no such page for the table")
+        refresh_blocks(config.docs, {BLOCK: block_text(rows, config, command, wall_s)}, [BLOCK])
+    return path
+
+
+def read_rows(path: Path) -> list[Row]:
+    """The rows of a CSV that :func:`write_outputs` wrote, in file order."""
+    import csv
+
+    def number(text: str) -> float:
+        return float(text) if text else math.nan
+
+    with Path(path).open(newline="") as f:
+        return [Row(r["group"], r["instance"], None, r["solver"], r["status"], number(r["objective"]),
+                    runtime_s=number(r["runtime_s"]), note=r["note"], reference=number(r["reference"]),
+                    reference_kind=r["reference_kind"]) for r in csv.DictReader(f)]
+
+
+class _Parser(argparse.ArgumentParser):
+    """Bad arguments are one ``gtsp-bench: error:`` line and exit code 2, as in the CLI."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"gtsp-bench: error: {message}\n")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="python -m gtsp_bench.heuristics_table",
+        description="Heuristics and peers on GTSPLIB (by size) and on generated UAV instances of "
+                    "large K: gap and time per group, into docs/solvers/heuristics.md.")
+    p.add_argument("--time-limit", "-t", type=float, default=10.0, metavar="S",
+                   help="seconds per solve (default: 10)")
+    p.add_argument("--per-group", type=int, default=3, metavar="N",
+                   help="GTSPLIB instances per size group, smallest first (default: 3)")
+    p.add_argument("--uav-instances", type=int, default=3, metavar="N",
+                   help="generated instances per K (default: 3)")
+    p.add_argument("-K", "--clusters", default=",".join(map(str, UAV_KS)), metavar="LIST",
+                   help="UAV cluster counts (default: 20,50,100,200)")
+    p.add_argument("--solvers", "-s", default=",".join(SOLVERS), metavar="LIST",
+                   help=f"solvers, comma-separated (default: {','.join(SOLVERS)})")
+    p.add_argument("--omega", type=float, default=0.5, help="omega of the UAV instances (default: 0.5)")
+    p.add_argument("--seed", type=int, default=0, help="instance-set seed (default: 0)")
+    p.add_argument("--solver-seed", type=int, default=0, help="seed of every solve (default: 0)")
+    p.add_argument("--max-nodes", type=int, default=15_000, metavar="N",
+                   help="largest GTSPLIB instance in nodes (default: 15000)")
+    p.add_argument("--no-gtsplib", action="store_true", help="generated instances only")
+    p.add_argument("--no-agtsp", action="store_true", help="leave out the asymmetric GTSPLIB files")
+    p.add_argument("--csv", default=str(DEFAULT_CSV), metavar="FILE",
+                   help=f"one row per solve (default: {DEFAULT_CSV})")
+    p.add_argument("--docs", default=str(DOCS_PAGE), metavar="PAGE",
+                   help=f"page whose '{BLOCK}' block gets the table (default: {DOCS_PAGE})")
+    p.add_argument("--no-docs", action="store_true", help="leave the documentation alone")
+    return p
+
+
+def make_config(args: argparse.Namespace) -> TableConfig:
+    """Check the command line's values."""
+    from gtsp_bench.registry import solver_names
+
+    solvers = tuple(s.strip() for s in args.solvers.split(",") if s.strip())
+    registered = solver_names()
+    unknown = [s for s in solvers if s not in registered]
+    if not solvers or unknown:
+        raise InputError(f"unknown solver {(unknown or [''])[0]!r} (valid: {', '.join(registered)})")
+    return TableConfig(
+        solvers=solvers, time_limit=check_float("time limit", args.time_limit, 0.0, math.inf),
+        per_group=check_int("--per-group", args.per_group, 0),
+        uav_ks=parse_ks(args.clusters) if args.clusters else (),
+        uav_instances=check_int("--uav-instances", args.uav_instances, 0),
+        omega=check_omega(args.omega), set_seed=check_seed(args.seed),
+        solver_seed=check_seed(args.solver_seed), gtsplib=not args.no_gtsplib,
+        agtsp=not args.no_agtsp, max_nodes=check_int("--max-nodes", args.max_nodes, 1),
+        csv=Path(args.csv), docs=None if args.no_docs else Path(args.docs),
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the table; bad input is one ``gtsp-bench: error:`` line and exit code 2."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = _parser().parse_args(argv)
+    try:
+        config = make_config(args)
+        if config.docs is not None and not config.docs.is_file():
+            raise InputError(f"{config.docs}: no such page for the table")
+        start = time.perf_counter()
+        rows = run_table(config)
+        wall = time.perf_counter() - start
+        command = "make bench-heuristics-table" + (f" TABLE_ARGS='{shlex.join(argv)}'" if argv else "")
+        path = write_outputs(rows, config, command, wall)
+    except InputError as e:
+        print(f"gtsp-bench: error: {e}", file=sys.stderr)
+        return 2
+    print(markdown(rows, config.solvers))
+    _say(f"rows: {path}; {wall:.0f} s in all" + (f"; table in {config.docs}" if config.docs else ""))
+    return 1 if any(r.status == "failed" for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,115 @@
+"""The heuristics-and-peers table (python -m gtsp_bench.heuristics_table): instance groups, the
+generated instances of large K, cells, and the generated block it writes into a page."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+
+from gtsp_bench import heuristics_table as ht
+from gtsp_bench.generator import MAX_COVER, check_generator_args
+from gtsp_bench.tables import Row
+
+from .conftest import REPO
+
+PAGE = "# Page\n\ntext before\n\n<!-- BEGIN generated:heuristics-table -->\nold\n" \
+       "<!-- END generated:heuristics-table -->\n\ntext after\n"
+
+
+@pytest.mark.parametrize("k", ht.UAV_KS)
+def test_uav_area_grows_with_k(k):
+    """The clusters cover at most a quarter of the area (the generator takes up to MAX_COVER),
+    and K = 20 keeps the paper's 1,000 m square."""
+    area = ht.uav_area(k)
+    assert k * 100.0**2 / area**2 <= ht.UAV_COVER <= MAX_COVER
+    check_generator_args(k, 20, 50.0, area)
+    assert (area == 1000.0) == (k <= 25)
+
+
+def test_uav_instances_are_seeded_and_sized():
+    """Instance i of K is the same whatever the count; K clusters of 20 nodes, depot at the middle
+    of the lower edge."""
+    a = ht.uav_instances(50, 2, 0)
+    b = ht.uav_instances(50, 1, 0)
+    assert a[0].name == b[0].name == "uav-K50-N20-a1500-s0-000"
+    assert (a[0].coords == b[0].coords).all() and a[0].n_clusters == 50 and a[0].n_nodes == 1000
+    assert a[0].depot.tolist() == [750.0, 0.0] and a[0].coords.max() <= 1500.0
+
+
+def test_gtsplib_groups_take_the_smallest_of_each_size():
+    """per_group instances of each size group in file order, the AGTSP files apart."""
+    picked = ht.gtsplib_instances(ht.TableConfig(per_group=2))
+    groups = {}
+    for group, inst, best in picked:
+        groups.setdefault(group, []).append((inst.n_nodes, inst.symmetric, best))
+    assert list(groups) == [g for g, _, _ in ht.GTSPLIB_GROUPS] + [ht.AGTSP_GROUP]
+    for label, lo, hi in ht.GTSPLIB_GROUPS:
+        assert len(groups[label]) == 2 and all(lo <= n <= hi and sym for n, sym, _ in groups[label])
+    assert [sym for _, sym, _ in groups[ht.AGTSP_GROUP]] == [False, False]
+    assert groups["GTSPLIB <= 200 nodes"][0] == (14, True, 1805.0)  # 3burma14
+
+
+def _row(solver, status, objective, runtime, group="g", instance="i"):
+    row = Row(group, instance, None, solver, status, objective, runtime_s=runtime)
+    return row.against(100.0, "best known")
+
+
+def test_cells():
+    """Mean gap and median time of the answers; refused/failed when none answered; n/m when some."""
+    assert ht.cell([_row("a", "feasible", 101.0, 1.0), _row("a", "time_limit", 103.0, 3.0)]) == "2.00% 2.00s*"
+    assert ht.cell([_row("a", "refused", math.nan, math.nan)]) == "refused"
+    none = [_row("a", "failed", math.nan, math.nan), _row("a", "refused", math.nan, math.nan)]
+    assert ht.cell(none) == "failed"
+    assert ht.cell([_row("a", "feasible", 110.0, 1.0), _row("a", "failed", math.nan, math.nan)]) == \
+        "10.00% 1.00s (1/2)"
+
+
+def test_run_writes_csv_and_the_page_block(tmp_path, capsys):
+    """A tiny run: GTSPLIB up to 20 nodes (3burma14 and the AGTSP 4br17) and one K = 4 instance;
+    greedy+ls refuses the asymmetric file; the page's block is replaced, the text around kept."""
+    page = tmp_path / "page.md"
+    page.write_text(PAGE)
+    argv = ["--time-limit", "1", "--per-group", "1", "--max-nodes", "20", "-K", "4",
+            "--uav-instances", "1", "--solvers", "greedy,greedy+ls", "--csv", str(tmp_path / "t.csv"),
+            "--docs", str(page)]
+    assert ht.main(argv) == 0
+    with (tmp_path / "t.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["instance"], r["solver"], r["status"]) for r in rows if r["status"] == "refused"] == [
+        ("4br17", "greedy+ls", "refused")]
+    assert {r["group"] for r in rows} == {"GTSPLIB <= 200 nodes", "GTSPLIB AGTSP", "UAV K=4"}
+    assert all(float(r["gap_percent"]) >= 0 for r in rows if r["status"] != "refused")
+    text = page.read_text()
+    assert text.startswith("# Page\n\ntext before\n") and text.endswith("text after\n")
+    assert "\nold\n" not in text and "| GTSPLIB AGTSP | 1 | best known | 0.00% " in text
+    assert "make bench-heuristics-table TABLE_ARGS='--time-limit 1 " in text
+    assert "| greedy | greedy+ls |" in capsys.readouterr().out
+    assert ht.markdown(ht.read_rows(tmp_path / "t.csv"), ["greedy", "greedy+ls"]) in text
+
+
+def test_the_committed_block_is_made_from_the_committed_rows():
+    """docs/solvers/heuristics.md's table is what markdown() makes of benchmarks/heuristics-table.csv."""
+    rows = ht.read_rows(REPO / ht.DEFAULT_CSV)
+    solvers = list(dict.fromkeys(r.solver for r in rows))
+    assert set(solvers) == set(ht.SOLVERS)
+    page = (REPO / ht.DOCS_PAGE).read_text(encoding="utf-8")
+    begin = page.index(f"<!-- BEGIN generated:{ht.BLOCK} -->")
+    end = page.index(f"<!-- END generated:{ht.BLOCK} -->")
+    assert ht.markdown(rows, solvers) in page[begin:end]
+
+
+def test_bad_options_are_one_line(tmp_path, capsys):
+    """An unknown solver, a missing page or a malformed number: one gtsp-bench: error line, exit
+    code 2."""
+    with pytest.raises(SystemExit) as stop:
+        ht.main(["--time-limit", "x"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err == "gtsp-bench: error: argument --time-limit/-t: invalid float value: 'x'\n"
+    assert ht.main(["--solvers", "greedy,nope", "--no-docs"]) == 2
+    assert capsys.readouterr().err.startswith("gtsp-bench: error: unknown solver 'nope' (valid: ")
+    assert ht.main(["--docs", str(tmp_path / "none.md")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"gtsp-bench: error: {tmp_path / 'none.md'}: no such page for the table\n"
