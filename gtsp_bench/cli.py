@@ -257,7 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
     g = p.add_argument_group("instance sets (--set)")
     g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",
                    help="sweep over an instance set, repeatable: 'gtsplib' (the bundled GTSPLIB, "
-                   "symmetric instances), a folder name under instances/ (uav-K10-N20-s1, ...), or "
+                   "143 instances, asymmetric ones too), a folder name under instances/ "
+                   "(uav-K10-N20-s1, ...), or "
                    "any folder of .json / .gtsp(.gz) files or one such file; its reference.csv "
                    "gives the gaps (--instances: the first N per K; omegas are ignored for GTSPLIB)")
     g.add_argument("--seeds", metavar="LIST",

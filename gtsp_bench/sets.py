@@ -251,9 +251,7 @@ def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
         except InputError as e:
             raise InputError(f"{where / 'best_known.csv'}: {e}") from None
     files, refs = [], {}
-    for r in table.values():
-        if not r.symmetric:  # AGTSP: the project reads symmetric instances only
-            continue
+    for r in table.values():  # AGTSP files too: symmetric-only solvers refuse them
         files.append(SetFile(where / f"{r.name}.gtsp.gz", r.name, r.clusters, r.nodes))
         source = "Fischetti et al. 1997; GLKH tour" if r.proven else "GLKH"
         refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, source, "")
@@ -263,7 +261,8 @@ def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
 def resolve_set(arg: str, instance_dir: str | os.PathLike[str] = "instances") -> InstanceSet:
     """The set a ``--set`` argument names.
 
-    ``gtsplib`` is the bundled GTSPLIB (its symmetric instances, smallest first); a name of a
+    ``gtsplib`` is the bundled GTSPLIB (all 143 instances, asymmetric ones included, smallest
+    first); a name of a
     folder under ``instance_dir`` a committed set; otherwise a folder path (its instance files in
     name order; a folder with GTSPLIB's ``best_known.csv`` and no ``reference.csv`` is read as
     GTSPLIB) or a single instance file (its folder's ``reference.csv`` applies).

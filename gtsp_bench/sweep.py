@@ -347,11 +347,13 @@ def _gaps_to_best_found(df: pd.DataFrame) -> pd.DataFrame:
 
 def summary_table(df: pd.DataFrame) -> pd.DataFrame:
     """Per set and solver: solves, what the gap is measured to, mean and max gap in percent,
-    hits (solves within :data:`HIT_GAP_PCT` of the reference), median seconds and solves
-    without an answer."""
+    hits (solves within :data:`HIT_GAP_PCT` of the reference), median seconds, solves the
+    solver refused (e.g. an asymmetric instance for a symmetric-only solver) and solves that
+    failed (no answer otherwise)."""
     out = []
     for (set_name, solver), g in df.groupby(["set", "solver"], sort=False):
         gaps = g["gap_percent"].dropna()
+        refused = g["status"] == "refused"
         times = g["runtime_s"].dropna()
         labels = sorted({lab for lab in g["gap_label"] if lab})
         out.append({
@@ -361,10 +363,11 @@ def summary_table(df: pd.DataFrame) -> pd.DataFrame:
             "max_gap_pct": gaps.max() if len(gaps) else math.nan,
             "hits": int((gaps <= HIT_GAP_PCT).sum()),
             "median_s": statistics.median(times) if len(times) else math.nan,
-            "failed": int(g["objective"].isna().sum()),
+            "refused": int(refused.sum()),
+            "failed": int((g["objective"].isna() & ~refused).sum()),
         })
     return pd.DataFrame(out, columns=["set", "solver", "solves", "gap", "mean_gap_pct",
-                                      "max_gap_pct", "hits", "median_s", "failed"])
+                                      "max_gap_pct", "hits", "median_s", "refused", "failed"])
 
 
 def summary_markdown(table: pd.DataFrame) -> str:
@@ -372,12 +375,12 @@ def summary_markdown(table: pd.DataFrame) -> str:
     def cell(v: Any, digits: int) -> str:
         return "-" if isinstance(v, float) and not math.isfinite(v) else f"{v:.{digits}f}"
 
-    lines = ["| set | solver | solves | gap | mean gap % | max gap % | hits | median s | failed |",
-             "|---|---|---:|---|---:|---:|---:|---:|---:|"]
+    lines = ["| set | solver | solves | gap | mean gap % | max gap % | hits | median s | refused | failed |",
+             "|---|---|---:|---|---:|---:|---:|---:|---:|---:|"]
     for r in table.itertuples():
         lines.append(f"| {r.set} | {r.solver} | {r.solves} | {r.gap} | {cell(r.mean_gap_pct, 3)} | "
                      f"{cell(r.max_gap_pct, 3)} | {r.hits}/{r.solves} | {cell(r.median_s, 2)} | "
-                     f"{r.failed} |")
+                     f"{r.refused} | {r.failed} |")
     return "\n".join(lines) + "\n"
 
 
@@ -390,6 +393,7 @@ class SweepSummary:
     cached: int = 0
     run: int = 0
     failed: int = 0
+    refused: int = 0
     below_optimum: int = 0
     improvements: list[Improvement] = field(default_factory=list)
     updated: list[str] = field(default_factory=list)
@@ -466,13 +470,15 @@ def _run_sweep(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[Ent
             say(f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
                 f"{p.wall_s:.1f} s on {p.workers} worker(s)")
     df = sweep_rows(config, loaded, cells, records)
-    summary.failed = int(df["objective"].isna().sum())
+    refused = df["status"] == "refused"
+    summary.refused = int(refused.sum())
+    summary.failed = int((df["objective"].isna() & ~refused).sum())
     _references(config, loaded, df, summary, say)
     write_sweep_outputs(config.out_dir, df, summary)
     summary.wall_s = time.perf_counter() - t0
     say("wrote " + ", ".join(str(p) for p in summary.written))
     say(f"done in {summary.wall_s:.1f} s: {summary.run} solves run, {summary.cached} re-used, "
-        f"{summary.failed} without an answer")
+        f"{summary.failed} failed, {summary.refused} refused")
     return summary
 
 

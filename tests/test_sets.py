@@ -139,18 +139,18 @@ def test_resolve_errors(tmp_path):
 
 
 def test_gtsplib_set_reads_best_known_csv():
-    """The gtsplib set is the symmetric instances of best_known.csv, whose values and statuses
-    are its references (no reference.csv is kept beside it)."""
+    """The gtsplib set is every instance of best_known.csv (the asymmetric ones too), whose values
+    and statuses are its references (no reference.csv is kept beside it)."""
     from gtsp_bench import gtsplib
 
     s = resolve_set("gtsplib")
     table = gtsplib.best_known()
-    assert [f.stem for f in s.files] == [n for n, r in table.items() if r.type != "AGTSP"]
+    assert [f.stem for f in s.files] == list(table) and len(s.files) == 143
     assert s.reference_path is None and not (gtsplib.folder() / "reference.csv").exists()
     ref = s.references[("11berlin52", None)]
     assert (ref.value, ref.status, ref.label) == (4040.0, "optimal", "to optimum")
     assert s.references[("107att532", None)].label == "to best known"
-    assert "4br17" not in {f.stem for f in s.files}  # AGTSP
+    assert s.references[("4br17", None)].value == 31  # AGTSP
     assert resolve_set(str(gtsplib.folder())).files == s.files
 
 

@@ -147,6 +147,22 @@ def test_sweep_outputs_reuse_and_references(tmp_path, monkeypatch, capsys):
     assert code == 1 and "below the proven optimum" in err and "tiny/tiny-000: dp" in err
 
 
+def test_an_asymmetric_gtsplib_instance_is_refused_not_failed(tmp_path, capsys):
+    """The gtsplib set includes the AGTSP files: a symmetric-only solver's solve of one is
+    `refused` (counted apart, exit 0), a solver that handles asymmetric costs answers it at its
+    best known value."""
+    out = tmp_path / "out"
+    argv = ["bench", "--set", "gtsplib", "--names", "4br17", "--solvers", "greedy+ls,dp",
+            "--time-limit", "5", "--jobs", "1", "--no-progress", "--out", str(out)]
+    assert main(argv) == 0
+    df = pd.read_csv(out / "sweep.csv").set_index("solver")
+    assert df.loc["greedy+ls", "status"] == "refused" and math.isnan(df.loc["greedy+ls", "objective"])
+    assert "symmetric costs only" in df.loc["greedy+ls", "note"]
+    assert df.loc["dp", "objective"] == 31 and df.loc["dp", "gap_percent"] == 0
+    table = capsys.readouterr().out
+    assert "| gtsplib | greedy+ls | 1 | to best known | - | - | 0/1 | - | 1 | 0 |" in table
+
+
 @pytest.mark.parametrize("args, message", [
     (["--set", "x", "--suite", "exact"], "--set runs a sweep of its own: it cannot be combined with --suite"),
     (["--set", "x", "--experiments", "ratio-k"], "cannot be combined with --experiments"),
