@@ -1,0 +1,396 @@
+"""Compiled inner loops of :mod:`gtsp_bench.solvers.heuristics.lns` (numba, ``cache=True``).
+
+A tour is an ``int64`` array of node ids, one per GTSP cluster, in cycle order. The problem is
+given as ``edge`` (``(m, m)`` symmetric float64), ``node`` (``(m,)``) and ``start`` (``(k + 1,)``:
+the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as :func:`gtsp_bench.problem.price`
+numbers them). One iteration of the search, :func:`iterate`, is one call: remove clusters, insert
+them back, then the local search
+
+* **2-opt** on the cycle with the heads kept (first improvement);
+* **move** (GLNS's "moveopt"): each cluster in turn is taken out and put back at its cheapest
+  position and head, when that is cheaper than where it is;
+* **re-opt** (GLNS's "reopt"): optimal heads for the cluster order, a shortest path through the
+  layers from each node of the smallest cluster;
+
+repeated until none of the three improves. Random numbers come from numba's own generator, seeded
+by :func:`seed` (with ``NUMBA_DISABLE_JIT=1`` the same code runs as plain Python on numpy's
+global generator: same answers, much slower).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: Removal operators, by index.
+REMOVALS = ("random", "worst", "segment", "distance")
+#: Insertion operators, by index: which pending cluster goes in next.
+INSERTIONS = ("cheapest", "farthest", "randomised")
+
+
+@njit(cache=True)
+def seed(value: int) -> None:
+    """Seed the generator the kernels draw from."""
+    np.random.seed(value)
+
+
+@njit(cache=True)
+def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
+    """Node costs plus edge costs of the closed tour ``t``."""
+    n = len(t)
+    total = 0.0
+    for i in range(n):
+        total += node[t[i]] + edge[t[i], t[(i + 1) % n]]
+    return total
+
+
+# ---------------------------------------------------------------------- removal
+@njit(cache=True)
+def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) -> np.ndarray:
+    """A mask of the ``k`` positions of ``t`` to take out (``how`` indexes :data:`REMOVALS`)."""
+    n = len(t)
+    drop = np.zeros(n, dtype=np.bool_)
+    if how == 0:  # random
+        perm = np.random.permutation(n)
+        for i in range(k):
+            drop[perm[i]] = True
+    elif how == 1:  # worst: largest saving, each scaled by a random factor in [0.5, 1.5)
+        key = np.empty(n)
+        for i in range(n):
+            a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
+            key[i] = -(edge[a, u] + node[u] + edge[u, b] - edge[a, b]) * (0.5 + np.random.random())
+        order = np.argsort(key)
+        for i in range(k):
+            drop[order[i]] = True
+    elif how == 2:  # segment
+        s = np.random.randint(0, n)
+        for i in range(k):
+            drop[(s + i) % n] = True
+    else:  # distance: the heads nearest a random one
+        s = np.random.randint(0, n)
+        key = np.empty(n)
+        for i in range(n):
+            key[i] = edge[t[s], t[i]]
+        key[s] = -1.0
+        order = np.argsort(key)
+        for i in range(k):
+            drop[order[i]] = True
+    return drop
+
+
+# ---------------------------------------------------------------------- insertion
+@njit(cache=True)
+def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarray,
+                node: np.ndarray, start: np.ndarray, noise: float) -> tuple[float, int, int]:
+    """Cheapest (cost, slot, node) to put cluster ``c`` on an edge of the linked cycle."""
+    best, best_s, best_v = np.inf, -1, -1
+    for s in range(n_slots):
+        a, b = at[s], at[nxt[s]]
+        base = -edge[a, b]
+        for v in range(start[c], start[c + 1]):
+            d = base + edge[a, v] + edge[v, b] + node[v]
+            if noise > 0.0:
+                d += noise * np.random.random()
+            if d < best:
+                best, best_s, best_v = d, s, v
+    return best, best_s, best_v
+
+
+@njit(cache=True)
+def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, edge: np.ndarray,
+           node: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """Put ``clusters`` back into the cycle ``partial``, each at a cheapest place and head.
+
+    ``how`` (:data:`INSERTIONS`) picks the next cluster: the one cheapest to insert, the one
+    dearest to insert, or a random one; ``noise`` adds up to that much to every price. Prices are
+    kept per pending cluster and re-computed in full only when its best edge was the one split.
+    """
+    r = len(clusters)
+    n = len(partial) + r
+    at = np.empty(n, dtype=np.int64)  # node in each slot
+    nxt = np.empty(n, dtype=np.int64)  # slot after each slot
+    p = len(partial)
+    for i in range(p):
+        at[i] = partial[i]
+        nxt[i] = (i + 1) % p
+    cost = np.empty(r)
+    slot = np.empty(r, dtype=np.int64)
+    head = np.empty(r, dtype=np.int64)
+    for j in range(r):
+        cost[j], slot[j], head[j] = _best_place(clusters[j], p, at, nxt, edge, node, start, noise)
+    pending = np.ones(r, dtype=np.bool_)
+    order = np.random.permutation(r)
+    for step in range(r):
+        if how == 2:
+            j = order[step]
+        else:
+            j = -1
+            for q in range(r):
+                if pending[q] and (j < 0 or (cost[q] < cost[j] if how == 0 else cost[q] > cost[j])):
+                    j = q
+        pending[j] = False
+        s, new = slot[j], p
+        at[new] = head[j]
+        nxt[new] = nxt[s]
+        nxt[s] = new
+        p += 1
+        for q in range(r):
+            if not pending[q]:
+                continue
+            if slot[q] == s:  # its best edge is gone: price it again
+                cost[q], slot[q], head[q] = _best_place(clusters[q], p, at, nxt, edge, node, start, noise)
+                continue
+            c = clusters[q]
+            for e in (s, new):  # the two new edges
+                a, b = at[e], at[nxt[e]]
+                base = -edge[a, b]
+                for v in range(start[c], start[c + 1]):
+                    d = base + edge[a, v] + edge[v, b] + node[v]
+                    if noise > 0.0:
+                        d += noise * np.random.random()
+                    if d < cost[q]:
+                        cost[q], slot[q], head[q] = d, e, v
+    out = np.empty(n, dtype=np.int64)
+    s = 0
+    for i in range(n):
+        out[i] = at[s]
+        s = nxt[s]
+    return out
+
+
+# ---------------------------------------------------------------------- local search
+@njit(cache=True)
+def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi: int) -> None:
+    """Reverse the cyclic run of positions ``lo .. hi`` (or, the same cycle, its complement when
+    that is shorter), keeping ``pos`` (the position of each cluster) in step."""
+    n = len(t)
+    length = (hi - lo) % n + 1
+    if 2 * length > n:
+        lo, hi, length = (hi + 1) % n, (lo - 1) % n, n - length
+    for x in range(length // 2):
+        p, q = (lo + x) % n, (hi - x) % n
+        t[p], t[q] = t[q], t[p]
+        pos[cluster_of[t[p]]] = p
+        pos[cluster_of[t[q]]] = q
+
+
+@njit(cache=True)
+def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
+            cluster_of: np.ndarray, tol: float) -> bool:
+    """2-opt with fixed heads over neighbour lists, first improvement, in place.
+
+    For each head ``a`` and each cluster ``c`` in ``near[cluster of a]``, the two exchanges that
+    make ``a`` adjacent to ``c``'s head are tried. Returns whether anything improved.
+    """
+    n = len(t)
+    if n < 5:
+        return False
+    any_gain = False
+    improved = True
+    while improved:
+        improved = False
+        for i in range(n):
+            for w in range(near.shape[1]):
+                a, b, p = t[i], t[(i + 1) % n], t[(i - 1) % n]
+                j = pos[near[cluster_of[a], w]]
+                c, d, e = t[j], t[(j + 1) % n], t[(j - 1) % n]
+                if c != b and d != a:  # a -> c ... b -> d: reverse i + 1 .. j
+                    delta = edge[a, c] + edge[b, d] - edge[a, b] - edge[c, d]
+                    if delta < -tol:
+                        _reverse(t, pos, cluster_of, (i + 1) % n, j)
+                        improved = any_gain = True
+                        continue
+                if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
+                    delta = edge[a, c] + edge[p, e] - edge[p, a] - edge[e, c]
+                    if delta < -tol:
+                        _reverse(t, pos, cluster_of, i, (j - 1) % n)
+                        improved = any_gain = True
+    return any_gain
+
+
+@njit(cache=True)
+def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
+             start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float) -> bool:
+    """Each cluster in turn to its cheapest place and head (GLNS's moveopt), in place.
+
+    The places tried are its own and the edges on either side of the heads of its neighbour
+    clusters ``near[c]``. Returns whether anything improved.
+    """
+    n = len(t)
+    if n < 3:
+        return False
+    any_gain = False
+    for c in np.random.permutation(n):
+        i = pos[c]
+        u = t[i]
+        a, b = t[(i - 1) % n], t[(i + 1) % n]
+        base = -edge[a, b]
+        saving = edge[a, u] + node[u] + edge[u, b] + base  # what taking u out saves
+        best, best_j, best_v = saving - tol, -1, -1
+        for v in range(start[c], start[c + 1]):  # the same place with another head
+            d = base + edge[a, v] + edge[v, b] + node[v]
+            if d < best:
+                best, best_j, best_v = d, -2, v
+        for w in range(near.shape[1]):
+            j0 = pos[near[c, w]]
+            for j in ((j0 - 1) % n, j0):  # the edge t[j] -> t[j + 1]
+                if j == i or (j + 1) % n == i:
+                    continue
+                x, y = t[j], t[(j + 1) % n]
+                base = -edge[x, y]
+                for v in range(start[c], start[c + 1]):
+                    d = base + edge[x, v] + edge[v, y] + node[v]
+                    if d < best:
+                        best, best_j, best_v = d, j, v
+        if best_j == -1:
+            continue
+        any_gain = True
+        if best_j == -2:
+            t[i] = best_v
+            continue
+        # remove position i, insert best_v after position best_j (indices before removal)
+        if best_j > i:
+            for q in range(i, best_j):
+                t[q] = t[q + 1]
+                pos[cluster_of[t[q]]] = q
+            t[best_j] = best_v
+            pos[c] = best_j
+        else:
+            for q in range(i, best_j + 1, -1):
+                t[q] = t[q - 1]
+                pos[cluster_of[t[q]]] = q
+            t[best_j + 1] = best_v
+            pos[c] = best_j + 1
+    return any_gain
+
+
+@njit(cache=True)
+def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+          cluster_of: np.ndarray) -> float:
+    """Optimal heads for the cluster order of ``t`` (in place); returns the tour's new cost."""
+    n = len(t)
+    first, size = 0, 1 << 62
+    for i in range(n):
+        c = cluster_of[t[i]]
+        if start[c + 1] - start[c] < size:
+            first, size = i, start[c + 1] - start[c]
+    cap = 0
+    for c in range(len(start) - 1):
+        cap = max(cap, start[c + 1] - start[c])
+    back = np.empty((n, cap), dtype=np.int64)
+    cur = np.empty(cap)
+    new = np.empty(cap)
+    best_total, best_path = np.inf, t.copy()
+    path = np.empty(n, dtype=np.int64)
+    c0 = cluster_of[t[first]]
+    for s in range(start[c0], start[c0 + 1]):
+        cur[0] = node[s]
+        prev_lo, prev_hi = s, s + 1
+        for step in range(1, n):
+            c = cluster_of[t[(first + step) % n]]
+            lo, hi = start[c], start[c + 1]
+            for v in range(lo, hi):
+                bv, bu = np.inf, -1
+                for u in range(prev_lo, prev_hi):
+                    d = cur[u - prev_lo] + edge[u, v]
+                    if d < bv:
+                        bv, bu = d, u
+                new[v - lo] = bv + node[v]
+                back[step, v - lo] = bu
+            for v in range(hi - lo):
+                cur[v] = new[v]
+            prev_lo, prev_hi = lo, hi
+        for v in range(prev_lo, prev_hi):
+            total = cur[v - prev_lo] + edge[v, s]
+            if total < best_total:
+                best_total = total
+                path[n - 1] = v
+                for step in range(n - 1, 0, -1):
+                    c = cluster_of[t[(first + step) % n]]
+                    path[step - 1] = back[step, path[step] - start[c]]
+                for step in range(n):
+                    best_path[(first + step) % n] = path[step]
+    if n == 1:
+        best_total = np.inf
+        for v in range(start[c0], start[c0 + 1]):
+            if node[v] < best_total:
+                best_total = node[v]
+                best_path[0] = v
+    for i in range(n):
+        t[i] = best_path[i]
+    return best_total
+
+
+@njit(cache=True)
+def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+                 near: np.ndarray, cluster_of: np.ndarray, tol: float) -> float:
+    """2-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost."""
+    n = len(t)
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[cluster_of[t[i]]] = i
+    cost = tour_cost(t, edge, node)
+    while True:
+        two_opt(t, pos, edge, near, cluster_of, tol)
+        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol)
+        new_cost = tour_cost(t, edge, node)
+        if moved and new_cost < cost - tol:
+            cost = new_cost
+            continue
+        cost = new_cost
+        saved = t.copy()
+        dp = reopt(t, edge, node, start, cluster_of)
+        if dp < cost - tol:
+            cost = dp
+            continue
+        for i in range(n):
+            t[i] = saved[i]
+        return cost
+
+
+@njit(cache=True)
+def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
+            node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
+            tol: float) -> tuple[np.ndarray, float]:
+    """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search."""
+    drop = remove(t, k, removal, edge, node)
+    partial = t[~drop]
+    clusters = cluster_of[t[drop]]
+    new = insert(partial, clusters, insertion, noise, edge, node, start)
+    cost = local_search(new, edge, node, start, near, cluster_of, tol)
+    return new, cost
+
+
+def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
+    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least distance
+    between any of their nodes), nearest first."""
+    k = len(start) - 1
+    count = min(count, k - 1)
+    if count <= 0:
+        return np.zeros((k, 0), dtype=np.int64)
+    by_row = np.minimum.reduceat(edge, start[:-1], axis=0)  # (k, m)
+    dist = np.minimum.reduceat(by_row, start[:-1], axis=1)  # (k, k)
+    np.fill_diagonal(dist, np.inf)
+    near = np.argpartition(dist, count - 1, axis=1)[:, :count]
+    rows = np.arange(k)[:, None]
+    order = np.argsort(dist[rows, near], axis=1, kind="stable")
+    return np.ascontiguousarray(near[rows, order], dtype=np.int64)
+
+
+def warm_up() -> None:
+    """Compile (first use on a machine) or load (later, from numba's cache) every kernel, on a
+    tiny problem, so that a solver's clock does not pay for it."""
+    xy = np.arange(12.0)
+    edge = np.abs(xy[:, None] - xy[None, :])
+    node = np.zeros(12)
+    start = np.arange(0, 13, 2, dtype=np.int64)
+    cluster_of = np.repeat(np.arange(6), 2).astype(np.int64)
+    near = neighbours(edge, start, 3)
+    edge.setflags(write=False)  # as gtsp_bench.problem.price leaves them: numba types them apart
+    node.setflags(write=False)
+    t = np.arange(0, 12, 2, dtype=np.int64)
+    for how in range(len(REMOVALS)):
+        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9)
+    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9)
+    tour_cost(t, edge, node)
+    seed(0)
