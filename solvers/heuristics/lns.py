@@ -142,11 +142,10 @@ class _Search:
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
         done = best_at = trials = 0
-        converged = n < 4  # a cycle of at most 3 clusters is fixed by its heads: re-opt solved it
+        # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
+        converged = exact = n < 4
         timed_out = False
-        while not converged or not (s.stop_at_convergence or deadline is None):
-            if converged and deadline is None:
-                break
+        while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
                 break

@@ -80,44 +80,72 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
 
 # ---------------------------------------------------------------------- insertion
 @njit(cache=True)
-def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarray,
-                node: np.ndarray, start: np.ndarray, noise: float) -> tuple[float, int, int]:
-    """Cheapest (cost, slot, node) to put cluster ``c`` on an edge of the linked cycle."""
+def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarray, node: np.ndarray,
+                start: np.ndarray, noise: float, best: float, best_s: int,
+                best_v: int) -> tuple[float, int, int]:
+    """``(best, best_s, best_v)`` improved by putting cluster ``c`` on the edge from slot ``e``."""
+    a, b = at[e], at[nxt[e]]
+    base = -edge[a, b]
+    for v in range(start[c], start[c + 1]):
+        d = base + edge[a, v] + edge[v, b] + node[v]
+        if noise > 0.0:
+            d += noise * np.random.random()
+        if d < best:
+            best, best_s, best_v = d, e, v
+    return best, best_s, best_v
+
+
+@njit(cache=True)
+def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
+                slot_of: np.ndarray, near: np.ndarray, edge: np.ndarray, node: np.ndarray,
+                start: np.ndarray, noise: float) -> tuple[float, int, int]:
+    """Cheapest (cost, slot, node) to put cluster ``c`` on an edge of the linked cycle: the edges
+    beside its neighbour clusters' heads when the cycle is long (``4 * len(near[c]) < n_slots``)
+    and one of them is in it, else every edge."""
     best, best_s, best_v = np.inf, -1, -1
-    for s in range(n_slots):
-        a, b = at[s], at[nxt[s]]
-        base = -edge[a, b]
-        for v in range(start[c], start[c + 1]):
-            d = base + edge[a, v] + edge[v, b] + node[v]
-            if noise > 0.0:
-                d += noise * np.random.random()
-            if d < best:
-                best, best_s, best_v = d, s, v
+    if 4 * near.shape[1] < n_slots:
+        for w in range(near.shape[1]):
+            sl = slot_of[near[c, w]]
+            if sl >= 0:
+                best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start, noise,
+                                                   best, best_s, best_v)
+                best, best_s, best_v = _price_edge(c, sl, at, nxt, edge, node, start, noise,
+                                                   best, best_s, best_v)
+        if best_s >= 0:
+            return best, best_s, best_v
+    for e in range(n_slots):
+        best, best_s, best_v = _price_edge(c, e, at, nxt, edge, node, start, noise, best, best_s, best_v)
     return best, best_s, best_v
 
 
 @njit(cache=True)
 def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, edge: np.ndarray,
-           node: np.ndarray, start: np.ndarray) -> np.ndarray:
+           node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray) -> np.ndarray:
     """Put ``clusters`` back into the cycle ``partial``, each at a cheapest place and head.
 
     ``how`` (:data:`INSERTIONS`) picks the next cluster: the one cheapest to insert, the one
     dearest to insert, or a random one; ``noise`` adds up to that much to every price. Prices are
-    kept per pending cluster and re-computed in full only when its best edge was the one split.
+    kept per pending cluster and re-computed only when its best edge was the one split; on a long
+    cycle only the edges beside its ``near`` clusters are priced (:func:`_best_place`).
     """
     r = len(clusters)
     n = len(partial) + r
     at = np.empty(n, dtype=np.int64)  # node in each slot
     nxt = np.empty(n, dtype=np.int64)  # slot after each slot
+    prv = np.empty(n, dtype=np.int64)  # slot before each slot
+    slot_of = np.full(len(start) - 1, -1, dtype=np.int64)  # slot of each cluster in the cycle
     p = len(partial)
     for i in range(p):
         at[i] = partial[i]
         nxt[i] = (i + 1) % p
+        prv[i] = (i - 1) % p
+        slot_of[cluster_of[partial[i]]] = i
     cost = np.empty(r)
     slot = np.empty(r, dtype=np.int64)
     head = np.empty(r, dtype=np.int64)
     for j in range(r):
-        cost[j], slot[j], head[j] = _best_place(clusters[j], p, at, nxt, edge, node, start, noise)
+        cost[j], slot[j], head[j] = _best_place(clusters[j], p, at, nxt, prv, slot_of, near, edge,
+                                                node, start, noise)
     pending = np.ones(r, dtype=np.bool_)
     order = np.random.permutation(r)
     for step in range(r):
@@ -132,24 +160,21 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
         s, new = slot[j], p
         at[new] = head[j]
         nxt[new] = nxt[s]
+        prv[new] = s
+        prv[nxt[s]] = new
         nxt[s] = new
+        slot_of[clusters[j]] = new
         p += 1
         for q in range(r):
             if not pending[q]:
                 continue
             if slot[q] == s:  # its best edge is gone: price it again
-                cost[q], slot[q], head[q] = _best_place(clusters[q], p, at, nxt, edge, node, start, noise)
+                cost[q], slot[q], head[q] = _best_place(clusters[q], p, at, nxt, prv, slot_of, near,
+                                                        edge, node, start, noise)
                 continue
-            c = clusters[q]
             for e in (s, new):  # the two new edges
-                a, b = at[e], at[nxt[e]]
-                base = -edge[a, b]
-                for v in range(start[c], start[c + 1]):
-                    d = base + edge[a, v] + edge[v, b] + node[v]
-                    if noise > 0.0:
-                        d += noise * np.random.random()
-                    if d < cost[q]:
-                        cost[q], slot[q], head[q] = d, e, v
+                cost[q], slot[q], head[q] = _price_edge(clusters[q], e, at, nxt, edge, node, start,
+                                                        noise, cost[q], slot[q], head[q])
     out = np.empty(n, dtype=np.int64)
     s = 0
     for i in range(n):
@@ -356,7 +381,7 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
     drop = remove(t, k, removal, edge, node)
     partial = t[~drop]
     clusters = cluster_of[t[drop]]
-    new = insert(partial, clusters, insertion, noise, edge, node, start)
+    new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
     cost = local_search(new, edge, node, start, near, cluster_of, tol)
     return new, cost
 
