@@ -27,6 +27,7 @@ converged has status ``time_limit``.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,14 +46,9 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
 
-REMOVALS = kernels.REMOVALS
-INSERTIONS = kernels.INSERTIONS
-#: Scores of an iteration's operators: new best, better than current, accepted, rejected.
-SCORES = (3.0, 2.0, 1.0, 0.0)
-#: No operator weight falls below this (each keeps being tried).
-MIN_WEIGHT = 0.1
-#: Improvements smaller than this share of the tour cost are ignored (rounding noise).
-REL_TOL = 1e-9
+REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
+#: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
+CHUNK_SECONDS = 0.01
 
 
 @dataclass(frozen=True)
@@ -115,17 +111,6 @@ class _Search:
         self.near = kernels.neighbours(self.edge, self.start, settings.neighbours)
         n = problem.n_clusters
         self.max_remove = max(1, min(n - 2, math.ceil(settings.remove_fraction * n)))
-        self.weights = {"removal": np.ones(len(REMOVALS)), "insertion": np.ones(len(INSERTIONS))}
-
-    def pick(self, kind: str) -> int:
-        """An operator index drawn with probability proportional to its weight."""
-        cum = np.cumsum(self.weights[kind])
-        return min(int(np.searchsorted(cum, self.rng.random() * cum[-1], side="right")), len(cum) - 1)
-
-    def reward(self, kind: str, op: int, score: float) -> None:
-        """Blend an iteration's score into the weight of the operator it used."""
-        w = self.weights[kind]
-        w[op] = max(MIN_WEIGHT, (1.0 - self.s.reaction) * w[op] + self.s.reaction * score)
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
@@ -145,56 +130,43 @@ class _Search:
         # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
         converged = exact = n < 4
         timed_out = False
+        weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
+        steps = 1
         while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
                 break
-            cur, cur_cost = best, best_cost
-            trial_best, since = best_cost, 0
+            cur = best.copy()
             mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)]))
-            t0 = s.start_temperature * mean_edge
-            t1 = s.end_temperature * mean_edge
-            for it in range(iterations):
+            settings = np.array([iterations, patience, s.start_temperature * mean_edge,
+                                 s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
+                                 s.reaction], dtype=np.float64)
+            costs = np.array([best_cost, best_cost, best_cost])
+            counts = np.array([0, 0, done, best_at], dtype=np.int64)
+            while True:
+                if deadline is None:
+                    steps = iterations
+                tick = time.perf_counter()
+                ended = kernels.run_trial(cur, best, costs, counts, weights_r, weights_i, settings,
+                                          steps, self.edge, self.node, self.start, self.near,
+                                          self.cluster_of)
+                spent = time.perf_counter() - tick
+                if spent < CHUNK_SECONDS / 2 and not ended:
+                    steps = min(2 * steps, iterations)
+                elif spent > 2 * CHUNK_SECONDS:
+                    steps = max(1, steps // 2)
+                best_cost, done, best_at = float(costs[1]), int(counts[2]), int(counts[3])
+                if ended:
+                    break
                 if is_past(deadline):
                     timed_out = True
-                    break
-                temp = t0 * (t1 / t0) ** (it / max(1, iterations - 1)) if t0 > 0 and t1 > 0 else t0
-                r_op, i_op = self.pick("removal"), self.pick("insertion")
-                k = int(self.rng.integers(1, self.max_remove + 1))
-                noise = s.noise * mean_edge if self.rng.random() < 0.5 else 0.0
-                tol = REL_TOL * max(1.0, abs(cur_cost))
-                new, new_cost = kernels.iterate(cur, k, r_op, i_op, noise, self.edge, self.node,
-                                                self.start, self.near, self.cluster_of, tol)
-                done += 1
-                if new_cost < best_cost - tol:
-                    score = SCORES[0]
-                elif new_cost < cur_cost - tol:
-                    score = SCORES[1]
-                elif new_cost > cur_cost + tol and temp > 0 and \
-                        self.rng.random() < math.exp(-(new_cost - cur_cost) / temp):
-                    score = SCORES[2]
-                else:
-                    score = SCORES[3]
-                if score > SCORES[3]:
-                    cur, cur_cost = new, new_cost
-                if new_cost < best_cost - tol:
-                    best, best_cost, best_at = new, new_cost, done
-                if new_cost < trial_best - tol:
-                    trial_best, since = new_cost, 0
-                else:
-                    since += 1
-                self.reward("removal", r_op, score)
-                self.reward("insertion", i_op, score)
-                if since >= patience:
                     break
             if timed_out:
                 break
             trials += 1
             converged = converged or trials >= s.trials
-            if converged and s.stop_at_convergence:
-                break
-        weights = dict(zip(REMOVALS, self.weights["removal"], strict=True))
-        weights.update(zip(INSERTIONS, self.weights["insertion"], strict=True))
+        weights = dict(zip(REMOVALS, weights_r, strict=True))
+        weights.update(zip(INSERTIONS, weights_i, strict=True))
         stats = {"iterations": done, "trials": trials, "best_at": best_at, "converged": converged,
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
         return best, best_cost, stats, timed_out and not converged

@@ -386,6 +386,83 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
     return new, cost
 
 
+#: Scores of an iteration's operators: new best, better than current, accepted, rejected.
+SCORES = (3.0, 2.0, 1.0, 0.0)
+#: No operator weight falls below this (each keeps being tried).
+MIN_WEIGHT = 0.1
+#: Improvements smaller than this share of the tour cost are ignored (rounding noise).
+REL_TOL = 1e-9
+
+
+@njit(cache=True)
+def _roulette(w: np.ndarray) -> int:
+    """An index drawn with probability proportional to ``w``."""
+    x = np.random.random() * w.sum()
+    for i in range(len(w) - 1):
+        x -= w[i]
+        if x < 0.0:
+            return i
+    return len(w) - 1
+
+
+@njit(cache=True)
+def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.ndarray,
+              weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray, steps: int,
+              edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
+              cluster_of: np.ndarray) -> bool:
+    """Up to ``steps`` iterations of a trial; whether the trial has ended.
+
+    State, updated in place: ``cur`` and ``best`` (tours), ``costs`` = (current, best, trial best),
+    ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
+    iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
+    temperature, end temperature, largest removal, noise, reaction), temperatures and noise in
+    cost units. Iterations are scored, accepted (simulated annealing) and rewarded as the module
+    :mod:`gtsp_bench.solvers.heuristics.lns` describes; chunks of any size give the same run.
+    """
+    iterations, patience = int(settings[0]), int(settings[1])
+    t0, t1, max_remove, noise, reaction = settings[2], settings[3], int(settings[4]), settings[5], settings[6]
+    for _ in range(steps):
+        it = counts[0]
+        if it >= iterations or counts[1] >= patience:
+            return True
+        if t0 > 0.0 and t1 > 0.0:
+            temp = t0 * (t1 / t0) ** (it / max(1, iterations - 1))
+        else:
+            temp = t0
+        r_op, i_op = _roulette(weights_r), _roulette(weights_i)
+        k = np.random.randint(1, max_remove + 1)
+        level = noise if np.random.random() < 0.5 else 0.0
+        cur_cost, best_cost = costs[0], costs[1]
+        tol = REL_TOL * max(1.0, abs(cur_cost))
+        new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol)
+        counts[2] += 1
+        counts[0] += 1
+        if new_cost < best_cost - tol:
+            score = SCORES[0]
+        elif new_cost < cur_cost - tol:
+            score = SCORES[1]
+        elif new_cost > cur_cost + tol and temp > 0.0 and \
+                np.random.random() < np.exp(-(new_cost - cur_cost) / temp):
+            score = SCORES[2]
+        else:
+            score = SCORES[3]
+        if score > SCORES[3]:
+            cur[:] = new
+            costs[0] = new_cost
+        if new_cost < best_cost - tol:
+            best[:] = new
+            costs[1] = new_cost
+            counts[3] = counts[2]
+        if new_cost < costs[2] - tol:
+            costs[2] = new_cost
+            counts[1] = 0
+        else:
+            counts[1] += 1
+        weights_r[r_op] = max(MIN_WEIGHT, (1.0 - reaction) * weights_r[r_op] + reaction * score)
+        weights_i[i_op] = max(MIN_WEIGHT, (1.0 - reaction) * weights_i[i_op] + reaction * score)
+    return counts[0] >= iterations or counts[1] >= patience
+
+
 def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
     """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least distance
     between any of their nodes), nearest first."""
@@ -416,6 +493,10 @@ def warm_up() -> None:
     t = np.arange(0, 12, 2, dtype=np.int64)
     for how in range(len(REMOVALS)):
         iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9)
+    cur = t.copy()
+    run_trial(cur, cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
+              np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
+              4, edge, node, start, near, cluster_of)
     local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9)
     tour_cost(t, edge, node)
     seed(0)
