@@ -110,7 +110,8 @@ def test_very_small_instances(k, depot):
 
 def test_operators_are_all_used():
     """Every removal and insertion operator keeps a positive weight (none is switched off)."""
-    r = run_solver(get_solver("lns", iterations=80, trials=1, **CONVERGE), generate_instance(8, 4, seed=0), 0.5)
+    solver = get_solver("lns", iterations=80, trials=1, **CONVERGE)
+    r = run_solver(solver, generate_instance(8, 4, seed=0), 0.5)
     assert set(r.stats["weights"]) == {"random", "worst", "segment", "distance", "cheapest", "farthest",
                                        "randomised"}
     assert all(w > 0 for w in r.stats["weights"].values())

@@ -41,7 +41,8 @@ def test_local_search_never_worse_and_feasible(seed):
     for _ in range(5):
         t = _random_tour(p, rng)
         before = p.tour_cost(t)
-        cost = kernels.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9)
+        awake = np.ones(p.n_clusters, dtype=bool)
+        cost = kernels.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9, awake)
         assert _feasible(p, t)
         assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
         assert cost <= before + 1e-9
@@ -102,8 +103,9 @@ def test_compiled_equals_python():
     pos = np.empty(len(t), dtype=np.int64)
     a, b = t.copy(), t.copy()
     pos[cluster_of[a]] = np.arange(len(a))
-    kernels.two_opt(a, pos.copy(), p.edge_cost, near, cluster_of, 1e-9)
-    kernels.two_opt.py_func(b, pos.copy(), p.edge_cost, near, cluster_of, 1e-9)
+    active = np.ones((2, len(t)), dtype=bool)
+    kernels.two_opt(a, pos.copy(), p.edge_cost, near, cluster_of, 1e-9, active.copy())
+    kernels.two_opt.py_func(b, pos.copy(), p.edge_cost, near, cluster_of, 1e-9, active.copy())
     assert np.array_equal(a, b)
     ca = kernels.reopt(a, p.edge_cost, p.node_cost, start, cluster_of)
     cb = kernels.reopt.py_func(b, p.edge_cost, p.node_cost, start, cluster_of)

@@ -115,7 +115,8 @@ class _Search:
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
         tol = REL_TOL * max(1.0, abs(kernels.tour_cost(t, self.edge, self.node)))
-        cost = kernels.local_search(t, self.edge, self.node, self.start, self.near, self.cluster_of, tol)
+        cost = kernels.local_search(t, self.edge, self.node, self.start, self.near, self.cluster_of, tol,
+                                    np.ones(self.p.n_clusters, dtype=np.bool_))
         return t, cost
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
@@ -222,7 +223,7 @@ class Lns:
         deadline = deadline_after(time_limit)
         problem = price(instance, omega)
         search = _Search(problem, self.settings, np.random.default_rng(seed))
-        tour, cost, stats, timed_out = search.run(deadline)
+        tour, _, stats, timed_out = search.run(deadline)
         order, heads = problem.to_solution(tour)
         return Solution(order, heads, objective=problem.tour_cost(tour),
                         status="time_limit" if timed_out else "feasible", stats=stats)

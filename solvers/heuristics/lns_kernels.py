@@ -200,12 +200,24 @@ def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi
 
 
 @njit(cache=True)
-def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
-            cluster_of: np.ndarray, tol: float) -> bool:
-    """2-opt with fixed heads over neighbour lists, first improvement, in place.
+def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) -> None:
+    """Wake (both don't-look bits of) the cluster at position ``i`` and its two tour neighbours."""
+    n = len(t)
+    for q in (i - 1, i, i + 1):
+        c = cluster_of[t[q % n]]
+        active[0, c] = True
+        active[1, c] = True
 
-    For each head ``a`` and each cluster ``c`` in ``near[cluster of a]``, the two exchanges that
-    make ``a`` adjacent to ``c``'s head are tried. Returns whether anything improved.
+
+@njit(cache=True)
+def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
+            cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
+    """2-opt with fixed heads over neighbour lists and don't-look bits, first improvement, in place.
+
+    For each awake head ``a`` (``active[0]`` of its cluster) and each cluster ``c`` in
+    ``near[cluster of a]``, the two exchanges that make ``a`` adjacent to ``c``'s head are tried; a
+    head where none improves goes to sleep, the ends of a changed edge wake. Returns whether
+    anything improved.
     """
     n = len(t)
     if n < 5:
@@ -215,6 +227,9 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
     while improved:
         improved = False
         for i in range(n):
+            if not active[0, cluster_of[t[i]]]:
+                continue
+            found = False
             for w in range(near.shape[1]):
                 a, b, p = t[i], t[(i + 1) % n], t[(i - 1) % n]
                 j = pos[near[cluster_of[a], w]]
@@ -223,29 +238,42 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                     delta = edge[a, c] + edge[b, d] - edge[a, b] - edge[c, d]
                     if delta < -tol:
                         _reverse(t, pos, cluster_of, (i + 1) % n, j)
-                        improved = any_gain = True
+                        for x in (a, b, c, d):
+                            _touch(active, cluster_of, t, pos[cluster_of[x]])
+                        improved = found = True
                         continue
                 if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
                     delta = edge[a, c] + edge[p, e] - edge[p, a] - edge[e, c]
                     if delta < -tol:
                         _reverse(t, pos, cluster_of, i, (j - 1) % n)
-                        improved = any_gain = True
+                        for x in (a, p, c, e):
+                            _touch(active, cluster_of, t, pos[cluster_of[x]])
+                        improved = found = True
+            if found:
+                any_gain = True
+            else:
+                active[0, cluster_of[t[i]]] = False
     return any_gain
 
 
 @njit(cache=True)
 def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
-             start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float) -> bool:
-    """Each cluster in turn to its cheapest place and head (GLNS's moveopt), in place.
+             start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
+             active: np.ndarray) -> bool:
+    """Each awake cluster (``active[1]``) in turn to its cheapest place and head (GLNS's
+    moveopt), in place.
 
     The places tried are its own and the edges on either side of the heads of its neighbour
-    clusters ``near[c]``. Returns whether anything improved.
+    clusters ``near[c]``. A cluster that stays goes to sleep; one that moves wakes its old and new
+    neighbours. Returns whether anything improved.
     """
     n = len(t)
     if n < 3:
         return False
     any_gain = False
     for c in np.random.permutation(n):
+        if not active[1, c]:
+            continue
         i = pos[c]
         u = t[i]
         a, b = t[(i - 1) % n], t[(i + 1) % n]
@@ -268,11 +296,14 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
                     if d < best:
                         best, best_j, best_v = d, j, v
         if best_j == -1:
+            active[1, c] = False
             continue
         any_gain = True
         if best_j == -2:
             t[i] = best_v
+            _touch(active, cluster_of, t, i)
             continue
+        _touch(active, cluster_of, t, i)  # the old neighbours (and c)
         # remove position i, insert best_v after position best_j (indices before removal)
         if best_j > i:
             for q in range(i, best_j):
@@ -286,6 +317,7 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 pos[cluster_of[t[q]]] = q
             t[best_j + 1] = best_v
             pos[c] = best_j + 1
+        _touch(active, cluster_of, t, pos[c])  # the new neighbours
     return any_gain
 
 
@@ -348,16 +380,24 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 
 @njit(cache=True)
 def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
-                 near: np.ndarray, cluster_of: np.ndarray, tol: float) -> float:
-    """2-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost."""
+                 near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray) -> float:
+    """2-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost.
+
+    ``awake`` marks the clusters to look at first (with their tour neighbours): those just
+    inserted, or all of them.
+    """
     n = len(t)
     pos = np.empty(n, dtype=np.int64)
     for i in range(n):
         pos[cluster_of[t[i]]] = i
+    active = np.zeros((2, n), dtype=np.bool_)
+    for i in range(n):
+        if awake[cluster_of[t[i]]]:
+            _touch(active, cluster_of, t, i)
     cost = tour_cost(t, edge, node)
     while True:
-        two_opt(t, pos, edge, near, cluster_of, tol)
-        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol)
+        two_opt(t, pos, edge, near, cluster_of, tol, active)
+        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active)
         new_cost = tour_cost(t, edge, node)
         if moved and new_cost < cost - tol:
             cost = new_cost
@@ -367,6 +407,9 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
         dp = reopt(t, edge, node, start, cluster_of)
         if dp < cost - tol:
             cost = dp
+            for i in range(n):
+                if t[i] != saved[i]:
+                    _touch(active, cluster_of, t, i)
             continue
         for i in range(n):
             t[i] = saved[i]
@@ -377,12 +420,15 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
             tol: float) -> tuple[np.ndarray, float]:
-    """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search."""
+    """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
+    (waking the inserted clusters)."""
     drop = remove(t, k, removal, edge, node)
     partial = t[~drop]
     clusters = cluster_of[t[drop]]
     new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
-    cost = local_search(new, edge, node, start, near, cluster_of, tol)
+    awake = np.zeros(len(t), dtype=np.bool_)
+    awake[clusters] = True
+    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake)
     return new, cost
 
 
@@ -425,10 +471,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
         it = counts[0]
         if it >= iterations or counts[1] >= patience:
             return True
-        if t0 > 0.0 and t1 > 0.0:
-            temp = t0 * (t1 / t0) ** (it / max(1, iterations - 1))
-        else:
-            temp = t0
+        temp = t0 * (t1 / t0) ** (it / max(1, iterations - 1)) if t0 > 0.0 and t1 > 0.0 else t0
         r_op, i_op = _roulette(weights_r), _roulette(weights_i)
         k = np.random.randint(1, max_remove + 1)
         level = noise if np.random.random() < 0.5 else 0.0
@@ -497,6 +540,6 @@ def warm_up() -> None:
     run_trial(cur, cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
               np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
               4, edge, node, start, near, cluster_of)
-    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9)
+    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_))
     tour_cost(t, edge, node)
     seed(0)
