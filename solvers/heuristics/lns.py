@@ -16,7 +16,8 @@ accepted 1, rejected 0). A new tour replaces the current one by simulated-anneal
 temperature cooling geometrically over a trial from ``start_temperature`` to ``end_temperature``
 times the mean edge cost of the tour. A trial ends after ``iterations`` iterations or ``patience``
 without a new trial best; the first trial starts from the greedy tour improved by the local
-search, later ones from the best tour so far.
+search, later ones from the best tour so far, and a trial that did not improve it makes the next
+one hotter (temperatures and noise doubled, up to ``MAX_HEAT`` times).
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -47,6 +48,8 @@ from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import Solution
 
 REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
+#: A trial that does not improve the best tour doubles the next one's temperatures, up to this factor.
+MAX_HEAT = 8.0
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
 
@@ -59,8 +62,8 @@ class LnsSettings:
     trials: int = 3
     patience: int | None = None
     remove_fraction: float = 0.3
-    start_temperature: float = 0.05
-    end_temperature: float = 0.0005
+    start_temperature: float = 0.3
+    end_temperature: float = 0.003
     reaction: float = 0.1
     noise: float = 0.1
     neighbours: int = 10
@@ -132,16 +135,17 @@ class _Search:
         converged = exact = n < 4
         timed_out = False
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
-        steps = 1
+        steps, heat = 1, 1.0
         while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
                 break
             cur = best.copy()
-            mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)]))
+            mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)])) * heat
             settings = np.array([iterations, patience, s.start_temperature * mean_edge,
                                  s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
                                  s.reaction], dtype=np.float64)
+            trial_start = best_cost
             costs = np.array([best_cost, best_cost, best_cost])
             counts = np.array([0, 0, done, best_at], dtype=np.int64)
             while True:
@@ -165,6 +169,8 @@ class _Search:
             if timed_out:
                 break
             trials += 1
+            # A trial that did not improve the best tour: the next one starts hotter.
+            heat = 1.0 if best_cost < trial_start - REL_TOL * abs(trial_start) else min(MAX_HEAT, 2 * heat)
             converged = converged or trials >= s.trials
         weights = dict(zip(REMOVALS, weights_r, strict=True))
         weights.update(zip(INSERTIONS, weights_i, strict=True))
@@ -201,8 +207,8 @@ class Lns:
 
     def __init__(
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
-        remove_fraction: float = 0.3, start_temperature: float = 0.05,
-        end_temperature: float = 0.0005, reaction: float = 0.1, noise: float = 0.1,
+        remove_fraction: float = 0.3, start_temperature: float = 0.3,
+        end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int = 10, stop_at_convergence: bool = False,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction,
