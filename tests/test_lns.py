@@ -128,6 +128,7 @@ def test_operators_are_all_used():
     ({"reaction": 0}, "reaction"),
     ({"noise": float("inf")}, "noise"),
     ({"neighbours": 0}, "neighbours"),
+    ({"max_removals": 0}, "max_removals must be an integer >= 1"),
     ({"stop_at_convergence": "yes"}, "stop_at_convergence must be true or false"),
 ])
 def test_bad_options_rejected(options, message):

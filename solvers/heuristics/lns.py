@@ -2,11 +2,11 @@
 
 Each iteration removes some clusters from the current tour and puts them back:
 
-* removal (1 to ``remove_fraction`` of the clusters): **random** clusters, the **worst** ones (the
-  largest saving when removed, randomised), a **segment** of consecutive clusters, or the clusters
-  whose heads are nearest a random head (**distance**);
+* removal (1 to ``remove_fraction`` of the clusters, at most ``max_removals``): **random**
+  clusters, the **worst** ones (the largest saving when removed, randomised), a **segment** of
+  consecutive clusters, or the clusters whose heads are nearest a random head (**distance**);
 * insertion: the pending cluster **cheapest** to insert goes in next, or the **farthest** (dearest),
-  or a **random** one, each at its cheapest edge and head; every other iteration adds noise (up to
+  or a **randomised** pick, each at its cheapest edge and head; every other iteration adds noise (up to
   ``noise`` times the mean edge cost) to the prices;
 
 then a local search (:mod:`gtsp_bench.solvers.heuristics.lns_kernels`: 2-opt, GLNS's "moveopt" and
@@ -62,6 +62,7 @@ class LnsSettings:
     trials: int = 3
     patience: int | None = None
     remove_fraction: float = 0.3
+    max_removals: int = 100
     start_temperature: float = 0.3
     end_temperature: float = 0.003
     reaction: float = 0.1
@@ -76,6 +77,7 @@ class LnsSettings:
         if self.patience is not None:
             check_int("patience", self.patience, 1)
         check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
+        check_int("max_removals", self.max_removals, 1)
         check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
         check_float("end_temperature", self.end_temperature, 0.0, math.inf, open_low=False)
         if self.end_temperature > self.start_temperature:
@@ -113,7 +115,7 @@ class _Search:
         self.cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
         self.near = kernels.neighbours(self.edge, self.start, settings.neighbours)
         n = problem.n_clusters
-        self.max_remove = max(1, min(n - 2, math.ceil(settings.remove_fraction * n)))
+        self.max_remove = max(1, min(n - 2, settings.max_removals, math.ceil(settings.remove_fraction * n)))
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
@@ -193,6 +195,8 @@ class Lns:
         Iterations without a new trial best that end a trial (default ``max(50, 5 n)``).
     remove_fraction
         At most this share of the clusters is removed per iteration, in (0, 1].
+    max_removals
+        And at most this many clusters (>= 1).
     start_temperature, end_temperature
         Annealing temperatures as multiples of the tour's mean edge cost (>= 0).
     reaction
@@ -207,11 +211,11 @@ class Lns:
 
     def __init__(
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
-        remove_fraction: float = 0.3, start_temperature: float = 0.3,
+        remove_fraction: float = 0.3, max_removals: int = 100, start_temperature: float = 0.3,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int = 10, stop_at_convergence: bool = False,
     ) -> None:
-        self.settings = LnsSettings(iterations, trials, patience, remove_fraction,
+        self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence)
 
