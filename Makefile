@@ -9,7 +9,7 @@ K      ?= 4..10
 BENCH_ARGS ?=
 SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-sets bench-scale clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-glns bench-sets bench-scale clean
 
 install: $(STAMP)
 
@@ -53,6 +53,12 @@ bench-heuristics-table: $(STAMP)
 
 bench-drl: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+# lns against GLNS on its 45 GTSPLIB instances (benchmarks/glns.py --help; GLNS_ARGS for options,
+# e.g. GLNS_ARGS="--seeds 3 --jobs 2", or "--large" for the 1,000-15,112-node files at 60 s).
+GLNS_ARGS ?=
+bench-glns: $(STAMP)
+	$(BIN)/python benchmarks/glns.py $(GLNS_ARGS)
 
 # A sweep over instance sets (gtsp-bench bench --set; outputs in benchmarks/out/sets): SET names
 # the set (gtsplib, a folder under instances/, a path), SET_ARGS passes more options.

@@ -1,4 +1,7 @@
-"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, options."""
+"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, budget, options.
+
+Most runs use ``stop_at_convergence`` (the old behaviour: stop after the trials) to stay fast.
+"""
 
 from __future__ import annotations
 
@@ -15,6 +18,9 @@ from gtsp_bench.registry import get_solver, run_solver
 from .conftest import GTSPLIB
 from .tiny_cases import tiny_case
 
+#: lns that stops when its trials are done instead of using the whole time limit.
+CONVERGE = {"stop_at_convergence": True}
+
 
 @pytest.mark.parametrize("depot", [True, False])
 def test_finds_most_brute_force_optima(depot):
@@ -22,7 +28,7 @@ def test_finds_most_brute_force_optima(depot):
     hits = 0
     for seed in range(10):
         inst, omega, optimum = tiny_case(seed, depot)
-        r = run_solver("lns", inst, omega, seed=seed)
+        r = run_solver(get_solver("lns", **CONVERGE), inst, omega, seed=seed)
         assert r.status == "feasible"
         assert r.objective >= optimum - 1e-9
         hits += r.objective <= optimum + 1e-9 * optimum
@@ -33,13 +39,43 @@ def test_matches_brute_force_on_k7():
     """A K = 7 instance with 3 nodes per cluster (11 million tours): lns finds the optimum."""
     inst = generate_instance(7, 3, seed=5)
     optimum = run_solver("brute", inst, 0.3).objective
-    assert run_solver("lns", inst, 0.3).objective == pytest.approx(optimum, rel=1e-9)
+    assert run_solver(get_solver("lns", **CONVERGE), inst, 0.3).objective == pytest.approx(optimum, rel=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_never_below_dp_optimum(seed):
+    """K = 9 UAV instances, several seeds: never below the DP's proven optimum, at it for most."""
+    inst = generate_instance(9, 4, seed=10 + seed)
+    optimum = run_solver("dp", inst, 0.4).objective
+    r = run_solver(get_solver("lns", **CONVERGE), inst, 0.4, seed=seed)
+    assert r.objective >= optimum - 1e-9 * optimum
+    assert r.objective == pytest.approx(optimum, rel=1e-9)
+
+
+def test_stop_at_convergence_stops_after_its_trials():
+    """With stop_at_convergence the run ends after exactly ``trials`` trials, converged."""
+    inst = generate_instance(12, 4, seed=3)
+    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2, **CONVERGE), inst, 0.5,
+                   time_limit=600)
+    assert r.status == "feasible"
+    assert r.stats["trials"] == 2 and r.stats["converged"] is True
+    assert r.stats["iterations"] <= 20
+
+
+def test_uses_the_time_limit_when_converged():
+    """Without stop_at_convergence, the same settings go on with more trials until the limit, and
+    the run still counts as converged (status feasible)."""
+    inst = generate_instance(12, 4, seed=3)
+    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2), inst, 0.5, time_limit=1.0)
+    assert r.status == "feasible"
+    assert r.stats["converged"] is True
+    assert r.stats["trials"] > 2
 
 
 def test_seed_reproduces_the_run():
     """Without a binding time limit the same seed gives the same result and iteration count."""
     inst = generate_instance(9, 5, seed=1)
-    solver = get_solver("lns", iterations=60, trials=2)
+    solver = get_solver("lns", iterations=60, trials=2, **CONVERGE)
     a = run_solver(solver, inst, 0.7, seed=3, time_limit=60)
     b = run_solver(solver, inst, 0.7, seed=3, time_limit=60)
     assert (a.order, a.heads, a.objective, a.stats["iterations"]) == \
@@ -56,25 +92,28 @@ def test_time_limit_returns_best_tour():
 
 def test_gtsplib_file():
     """On 11berlin52 (no depot) a short run reaches the proven optimum 4040."""
-    r = run_solver(get_solver("lns", iterations=100, trials=1), read_instance(GTSPLIB / "11berlin52.gtsp.gz"),
-                   None)
+    r = run_solver(get_solver("lns", iterations=100, trials=1, **CONVERGE),
+                   read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     assert sorted(r.order) == list(range(11))
     assert r.objective == 4040
 
 
 @pytest.mark.parametrize("k, depot", [(1, True), (1, False), (2, True), (2, False), (3, False)])
 def test_very_small_instances(k, depot):
-    """One to three clusters, with or without a depot, are solved exactly."""
+    """One to three clusters, with or without a depot, are solved exactly (and at once: no trials)."""
     base = generate_instance(k, 4, seed=k)
     inst = base if depot else Instance(name="nd", clusters=base.clusters)
     r = run_solver("lns", inst, 0.5)
+    assert r.stats["trials"] == 0 and r.status == "feasible"
     assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-12)
 
 
 def test_operators_are_all_used():
     """Every removal and insertion operator keeps a positive weight (none is switched off)."""
-    r = run_solver(get_solver("lns", iterations=80, trials=1), generate_instance(8, 4, seed=0), 0.5)
-    assert set(r.stats["weights"]) == {"random", "worst", "segment", "cheapest", "randomised"}
+    solver = get_solver("lns", iterations=80, trials=1, **CONVERGE)
+    r = run_solver(solver, generate_instance(8, 4, seed=0), 0.5)
+    assert set(r.stats["weights"]) == {"random", "worst", "segment", "distance", "cheapest", "farthest",
+                                       "randomised"}
     assert all(w > 0 for w in r.stats["weights"].values())
 
 
@@ -88,6 +127,9 @@ def test_operators_are_all_used():
     ({"start_temperature": 0.01, "end_temperature": 0.1}, "must not exceed"),
     ({"reaction": 0}, "reaction"),
     ({"noise": float("inf")}, "noise"),
+    ({"neighbours": 0}, "neighbours"),
+    ({"max_removals": 0}, "max_removals must be an integer >= 1"),
+    ({"stop_at_convergence": "yes"}, "stop_at_convergence must be true or false"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""

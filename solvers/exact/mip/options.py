@@ -74,5 +74,6 @@ def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float
     """
     if trials == 0:
         return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
-    sol = Lns(trials=trials).solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
+    lns = Lns(trials=trials, stop_at_convergence=True)  # its trials, not the whole time limit
+    sol = lns.solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
     return problem.to_tour(sol.order, sol.heads)

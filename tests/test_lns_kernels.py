@@ -1,0 +1,116 @@
+"""The compiled lns kernels: feasible tours, costs that never rise, re-opt = the shared DP, and the
+compiled code giving the same answers as the same code run as Python."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import price
+
+
+def _problem(k: int, size: int, seed: int, depot: bool = True):
+    base = generate_instance(k, size, seed=seed)
+    inst = base if depot else Instance(name="nd", clusters=base.clusters)
+    p = price(inst, 0.5)
+    start = np.array([c[0] for c in p.clusters] + [p.n_nodes], dtype=np.int64)
+    cluster_of = np.ascontiguousarray(p.cluster_of, dtype=np.int64)
+    return p, start, cluster_of
+
+
+def _random_tour(p, rng) -> np.ndarray:
+    order = rng.permutation(p.n_clusters)
+    return np.array([int(rng.choice(p.clusters[c])) for c in order], dtype=np.int64)
+
+
+def _feasible(p, t) -> bool:
+    return len(t) == p.n_clusters and len(set(p.cluster_of[t].tolist())) == p.n_clusters
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_local_search_never_worse_and_feasible(seed):
+    """From random tours, the local search keeps one node per cluster and never raises the cost;
+    its returned cost is the tour's cost."""
+    p, start, cluster_of = _problem(14, 5, seed)
+    near = kernels.neighbours(p.edge_cost, start, 5)
+    rng = np.random.default_rng(seed)
+    for _ in range(5):
+        t = _random_tour(p, rng)
+        before = p.tour_cost(t)
+        awake = np.ones(p.n_clusters, dtype=bool)
+        cost = kernels.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9, awake)
+        assert _feasible(p, t)
+        assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
+        assert cost <= before + 1e-9
+
+
+@pytest.mark.parametrize("depot", [True, False])
+def test_reopt_matches_optimal_heads(depot):
+    """Re-opt gives the cost of the shared layered shortest path for the same order."""
+    p, start, cluster_of = _problem(9, 4, 1, depot)
+    rng = np.random.default_rng(0)
+    for _ in range(4):
+        t = _random_tour(p, rng)
+        cost = kernels.reopt(t, p.edge_cost, p.node_cost, start, cluster_of)
+        if p.depot is not None:
+            t0 = np.roll(t, -int(np.flatnonzero(t == p.depot)[0]))
+            order = p.cluster_of[t0[1:]]
+        else:
+            order = p.cluster_of[t]
+        assert cost == pytest.approx(optimal_heads(p, order)[1], rel=1e-12)
+        assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
+
+
+@pytest.mark.parametrize("how", range(len(kernels.INSERTIONS)))
+def test_remove_then_insert_is_a_tour(how):
+    """Every removal with every insertion gives back one node per cluster."""
+    p, start, cluster_of = _problem(12, 4, 2)
+    near = kernels.neighbours(p.edge_cost, start, 2)  # 4 * 2 < 12: the neighbour edges are used
+    t = _random_tour(p, np.random.default_rng(1))
+    kernels.seed(3)
+    for removal in range(len(kernels.REMOVALS)):
+        drop = kernels.remove(t, 5, removal, p.edge_cost, p.node_cost)
+        assert drop.sum() == 5
+        new = kernels.insert(t[~drop], cluster_of[t[drop]], how, 0.5, p.edge_cost, p.node_cost, start,
+                             near, cluster_of)
+        assert _feasible(p, new)
+
+
+def test_neighbours_are_nearest_first():
+    """Each cluster's neighbour list excludes itself and is sorted by cluster distance."""
+    p, start, _ = _problem(10, 3, 4)
+    near = kernels.neighbours(p.edge_cost, start, 4)
+    assert near.shape == (p.n_clusters, 4)
+    for c in range(p.n_clusters):
+        assert c not in near[c]
+        d = [p.edge_cost[np.ix_(p.clusters[c], p.clusters[o])].min() for o in near[c]]
+        assert d == sorted(d)
+        others = [p.edge_cost[np.ix_(p.clusters[c], p.clusters[o])].min()
+                  for o in range(p.n_clusters) if o != c and o not in near[c]]
+        assert max(d) <= min(others)
+
+
+def test_compiled_equals_python():
+    """The deterministic kernels give identical answers compiled and as plain Python (the code
+    that ``NUMBA_DISABLE_JIT=1`` runs)."""
+    p, start, cluster_of = _problem(11, 4, 5)
+    near = kernels.neighbours(p.edge_cost, start, 4)
+    t = _random_tour(p, np.random.default_rng(2))
+    pos = np.empty(len(t), dtype=np.int64)
+    a, b = t.copy(), t.copy()
+    pos[cluster_of[a]] = np.arange(len(a))
+    active = np.ones((2, len(t)), dtype=bool)
+    kernels.two_opt(a, pos.copy(), p.edge_cost, near, cluster_of, 1e-9, active.copy())
+    kernels.two_opt.py_func(b, pos.copy(), p.edge_cost, near, cluster_of, 1e-9, active.copy())
+    assert np.array_equal(a, b)
+    ca = kernels.reopt(a, p.edge_cost, p.node_cost, start, cluster_of)
+    cb = kernels.reopt.py_func(b, p.edge_cost, p.node_cost, start, cluster_of)
+    assert ca == cb and np.array_equal(a, b)
+    clusters = cluster_of[t[:4]]
+    ia = kernels.insert(t[4:], clusters, 0, 0.0, p.edge_cost, p.node_cost, start, near, cluster_of)
+    ib = kernels.insert.py_func(t[4:], clusters, 0, 0.0, p.edge_cost, p.node_cost, start, near, cluster_of)
+    assert np.array_equal(ia, ib)
