@@ -17,6 +17,8 @@ $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
 		-c constraints.txt -e '.[dev,gurobi,pyvrp,lkh,dask]'
+	@echo "compiling lns's kernels once (numba, cached beside the module; about a minute)"
+	$(BIN)/python -c "from gtsp_bench.solvers.heuristics.lns_kernels import warm_up; warm_up()"
 	touch $(STAMP)
 
 test: $(STAMP)

@@ -78,18 +78,25 @@ def _limit_threads() -> None:
 
 
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
-    """Solve one task message ``{fingerprint, text, omega, seed, time_limit}`` through the harness.
+    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options]}`` through
+    the harness.
 
-    The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint. An
+    The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint; a message with
+    solver ``options`` is solved by a solver built with them (once per set of options). An
     :class:`InputError` becomes a ``refused`` record, a :class:`MemoryError` a ``failed`` one with
     cause ``infrastructure``, any other exception a ``failed`` one with cause ``solver``.
     """
     from gtsp_bench.errors import InputError
     from gtsp_bench.parse import parse_instance_text
-    from gtsp_bench.registry import run_solver
+    from gtsp_bench.registry import get_solver, run_solver
 
     start = time.perf_counter()
     try:
+        if msg.get("options"):
+            built = "solver:" + json.dumps(msg["options"], sort_keys=True)
+            if built not in cache:
+                cache[built] = get_solver(name, **msg["options"])
+            solver = cache[built]
         inst = cache.get(msg["fingerprint"])
         if inst is None:
             inst = cache[msg["fingerprint"]] = parse_instance_text(msg["text"])

@@ -335,9 +335,21 @@ def experiment_solvers(config: BenchConfig, k: int) -> tuple[str, ...]:
     return tuple(dict.fromkeys((*config.solvers, config.references[k])))
 
 
+#: Solver options of the paper's experiments. ``lns`` runs to its own convergence there, as it did
+#: when the results were made: it finds every optimum at K <= 10 in well under a second, and its
+#: runtime is then its time to converge, not the 10 s budget it would otherwise use up.
+PAPER_SOLVER_OPTIONS: dict[str, dict[str, Any]] = {"lns": {"stop_at_convergence": True}}
+
+
+def paper_options(solver: str) -> tuple[tuple[str, Any], ...]:
+    """The options the paper's experiments give ``solver`` (sorted ``(name, value)`` pairs)."""
+    return tuple(sorted(PAPER_SOLVER_OPTIONS.get(solver, {}).items()))
+
+
 @dataclass(frozen=True)
 class Task:
-    """One solve; ``key`` identifies it in the task log."""
+    """One solve; ``key`` identifies it in the task log; ``options`` are the solver's keyword
+    options (none: its defaults)."""
 
     key: str
     solver: str
@@ -345,6 +357,7 @@ class Task:
     instance: StoredInstance
     seed: int
     time_limit: float
+    options: tuple[tuple[str, Any], ...] = ()
 
 
 @functools.cache
@@ -357,12 +370,15 @@ def _revision(solver: str) -> str:
         return ""
 
 
-def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float) -> str:
+def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float,
+             options: Sequence[tuple[str, Any]] = ()) -> str:
     """The log key: the instance's name and content hash, the solver, its revision if it has one
-    (a learned policy's weights, see :func:`gtsp_bench.registry.solver_revision`) and the solve
-    settings. A changed revision gives new keys, so those solves are run again."""
+    (a learned policy's weights, see :func:`gtsp_bench.registry.solver_revision`), its options if
+    any, and the solve settings. A changed revision gives new keys, so those solves are run again."""
     revision = _revision(solver)
     name = f"{solver}@{revision}" if revision else solver
+    if options:
+        name += "[" + ",".join(f"{k}={v!r}" for k, v in options) + "]"
     return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={time_limit:g}"
 
 
@@ -377,15 +393,19 @@ def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str
     for c in cells:
         inst = sets[c.k][c.index]
         for s in experiment_solvers(config, c.k):
-            key = task_key(inst, s, c.omega, SOLVER_SEED, config.time_limit)
-            tasks.setdefault(key, Task(key, s, c.omega, inst, SOLVER_SEED, config.time_limit))
+            options = paper_options(s)
+            key = task_key(inst, s, c.omega, SOLVER_SEED, config.time_limit, options)
+            tasks.setdefault(key, Task(key, s, c.omega, inst, SOLVER_SEED, config.time_limit, options))
     return sets, tasks
 
 
 # ---------------------------------------------------------------------- execution
 def _task_message(t: Task) -> dict[str, Any]:
-    return {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
-            "seed": t.seed, "time_limit": t.time_limit}
+    msg = {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
+           "seed": t.seed, "time_limit": t.time_limit}
+    if t.options:
+        msg["options"] = dict(t.options)
+    return msg
 
 
 def run_solver_tasks(
@@ -456,9 +476,10 @@ def experiment_rows(config: BenchConfig, experiment: str, sets: Mapping[int, lis
     for cell in experiment_cells(config, experiment):
         inst = sets[cell.k][cell.index]
         reference = config.references[cell.k]
-        ref = records[task_key(inst, reference, cell.omega, SOLVER_SEED, config.time_limit)]
+        ref = records[task_key(inst, reference, cell.omega, SOLVER_SEED, config.time_limit,
+                               paper_options(reference))]
         for s in experiment_solvers(config, cell.k):
-            rec = records[task_key(inst, s, cell.omega, SOLVER_SEED, config.time_limit)]
+            rec = records[task_key(inst, s, cell.omega, SOLVER_SEED, config.time_limit, paper_options(s))]
             rows.append(_row(experiment, cell, inst, s, reference, rec, ref, config.time_limit))
     return pd.DataFrame(rows, columns=list(CSV_COLUMNS))
 

@@ -470,3 +470,25 @@ def test_fuzz_the_log_reader_keeps_only_records_a_table_can_use(tmp_path_factory
         row = runner._row("ratio-k", cell, stored, "greedy", "dp", rec, rec, 10.0)
         assert row["status"] in ("optimal", "feasible", "time_limit", "failed", "refused")
         assert isinstance(row["objective"], float)
+
+
+def test_paper_experiments_run_lns_to_convergence(tmp_path):
+    """The paper's experiments give lns `stop_at_convergence` (its runtime there is its time to
+    converge, not the budget): the option is in the task key and reaches the worker, whose
+    solve stops after the default 3 trials; without options the key is as before."""
+    import json
+
+    from gtsp_bench.runner import paper_options, plan
+
+    config = _config(tmp_path, experiments="ratio-k", ks="4", solvers="lns", n_instances=1,
+                     time_limit=5)
+    _, tasks = plan(config)
+    lns = [t for t in tasks.values() if t.solver == "lns"]
+    assert len(lns) == 1 and lns[0].options == paper_options("lns") == (("stop_at_convergence", True),)
+    assert "|lns[stop_at_convergence=True]|" in lns[0].key
+    assert all("[" not in t.key for t in tasks.values() if t.solver != "lns")
+    summary = run_bench(config, log=lambda m: None)
+    assert summary.failed == 0
+    rec = next(json.loads(line) for line in _log_lines(config) if '"solver": "lns"' in line)
+    assert rec["stats"]["trials"] == 3 and rec["stats"]["converged"] is True
+    assert rec["status"] == "feasible"

@@ -218,6 +218,7 @@ class Lns:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence)
+        kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
