@@ -119,70 +119,6 @@ class Cuts:
         return pair[model.tail[edges], model.head[edges]], on_y
 
 
-def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int) -> Cuts:
-    """``Subtour(S, C)`` for ``S = sink_side``, over the side with fewer inside edges.
-
-    ``S`` must miss a whole cluster. Over ``S``: ``x(E(S)) - y(S - C) <= 0`` (when ``S`` holds
-    all of ``C``: ``x(E(S)) - y(S) <= -1``); over ``T = V - S``: ``x(E(T)) - y(T) - y(T & C)
-    <= -1``.
-
-    Parameters
-    ----------
-    model
-        The model.
-    sink_side
-        ``(n_nodes,)`` bool mask of ``S``.
-    c
-        The cluster ``C``.
-
-    Returns
-    -------
-    Cuts
-        One row.
-    """
-    in_c = model.cluster == c
-    s, t = sink_side, ~sink_side
-    edges_s = np.count_nonzero(s[model.tail] & s[model.head])
-    edges_t = np.count_nonzero(t[model.tail] & t[model.head])
-    if edges_s <= edges_t:
-        if not (in_c & t).any():
-            return Cuts.one(s, -s.astype(float), -1.0)
-        return Cuts.one(s, -(s & ~in_c).astype(float), 0.0)
-    return Cuts.one(t, -t.astype(float) - (t & in_c), -1.0)
-
-
-def lifted_cut(model: GtspModel, sink_side: np.ndarray, y: np.ndarray) -> Cuts:
-    """The strongest-looking ``Subtour(S', C)`` at ``y`` for a cut with sink side ``S``.
-
-    Nodes with ``y_i = 0`` have no edges at the current point, so moving them does not change
-    ``x(delta(S))`` there: every cluster whose chosen nodes all lie in ``S`` joins ``S`` whole,
-    which makes the right-hand side 2. Otherwise ``C`` is the cluster with the largest
-    ``y(S & C)``.
-
-    Parameters
-    ----------
-    model
-        The model.
-    sink_side
-        ``(n_nodes,)`` bool mask of ``S``.
-    y
-        The ``y`` part of the point.
-
-    Returns
-    -------
-    Cuts
-        One row, from :func:`subtour_cut`.
-    """
-    m = model.n_clusters
-    outside = np.bincount(model.cluster[(y > ZERO) & ~sink_side], minlength=m)
-    s = sink_side | (outside[model.cluster] == 0)
-    full = np.flatnonzero(outside == 0)
-    if len(full):
-        return subtour_cut(model, s, int(full[0]))
-    inside = np.bincount(model.cluster, weights=np.where(s, y, 0.0), minlength=m)
-    return subtour_cut(model, s, int(np.argmax(inside)))
-
-
 def subtour_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     """Cuts removing an integer solution with subtours (``None`` if it is one tour).
 
@@ -245,6 +181,53 @@ def node_cluster_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     return Cuts(side, r, ycoef, np.zeros(len(viol)))
 
 
+def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int, d: int | None = None) -> Cuts:
+    """``Subtour(S, C, D)`` for ``S = sink_side``, over the side with fewer inside edges.
+
+    The generalized subtour inequality ``x(delta(S)) >= 2 (y(S & C) + y(D - S) - 1)`` for any
+    node set ``S`` and clusters ``C != D`` (a tour with its heads of ``C`` inside and of ``D``
+    outside crosses ``S`` twice). With the degree rows, over ``S``: ``x(E(S)) - y(S - C) -
+    y(S & D) <= 0`` (when ``S`` holds all of ``C``: ``x(E(S)) - y(S) - y(S & D) <= -1``); over
+    ``T = V - S``: ``x(E(T)) - y(T) - y(T & C) + y(T & D) <= 0`` (when ``T`` holds all of ``D``:
+    ``x(E(T)) - y(T) - y(T & C) <= -1``). When ``S`` misses a whole cluster ``D`` this is
+    ``x(delta(S)) >= 2 y(S & C)``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    sink_side
+        ``(n_nodes,)`` bool mask of ``S``.
+    c
+        The cluster ``C``.
+    d
+        The cluster ``D`` (``None``: ``S`` must miss a whole cluster, which is taken).
+
+    Returns
+    -------
+    Cuts
+        One row.
+    """
+    m = model.n_clusters
+    s, t = sink_side, ~sink_side
+    in_s = np.bincount(model.cluster[s], minlength=m)
+    if d is None:
+        d = int(np.flatnonzero(in_s == 0)[0])
+    in_c, in_d = model.cluster == c, model.cluster == d
+    # edges with both ends in a side: its node pairs minus those inside one cluster
+    in_t = np.bincount(model.cluster[t], minlength=m)
+    edges_s = int(in_s.sum()) ** 2 - int((in_s**2).sum())
+    edges_t = int(in_t.sum()) ** 2 - int((in_t**2).sum())
+    if edges_s <= edges_t:
+        both = -(s & in_d).astype(float)
+        if not (in_c & t).any():
+            return Cuts.one(s, both - s, -1.0)
+        return Cuts.one(s, both - (s & ~in_c), 0.0)
+    if not (in_d & s).any():
+        return Cuts.one(t, -t.astype(float) - (t & in_c), -1.0)
+    return Cuts.one(t, -t.astype(float) - (t & in_c) + (t & in_d), 0.0)
+
+
 def _min_cut_sides(graph: sp.csr_array, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
     """Max-flow value and the sink sides of the two extreme minimum cuts (masks over nodes)."""
     flow = maximum_flow(graph, source, sink, method="dinic")
@@ -259,14 +242,24 @@ def _min_cut_sides(graph: sp.csr_array, source: int, sink: int) -> tuple[float, 
     return float(flow.flow_value), [~from_source, to_sink]
 
 
-def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
-    """Violated ``Subtour(S, C)`` cuts at a fractional solution, by one max-flow per cluster.
+def _best_pair(share: np.ndarray) -> tuple[int, int, float]:
+    """Clusters ``C != D`` maximising ``y(S & C) - y(D & S)`` for ``share[k] = y(S & k)``."""
+    order = np.argsort(share, kind="stable")
+    hi, lo = int(order[-1]), int(order[0])
+    return hi, lo, float(share[hi] - share[lo])
 
-    For cluster ``C``, a source cluster ``D != C`` (the smallest: the depot when there is one) is
-    tied to the source and each node ``i`` of ``C`` to the sink with capacity ``2 y_i``; edges
-    carry ``x_e`` both ways. A cut of value below 2 is a violated cut: ``x(delta(S)) + 2 y(C - S)
-    < 2`` with ``S`` the sink side, which misses ``D``. Cuts from both extreme minimum cuts are
-    returned, lifted by :func:`lifted_cut`.
+
+def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
+    """Violated generalized subtour cuts at a fractional solution, one max-flow per cluster.
+
+    On the support graph (nodes with ``y > 0``; edges carry ``x_e`` both ways), for cluster
+    ``C`` the nodes of a source cluster ``D`` (the one with the largest ``y``, the depot when
+    there is one) are tied to the source and those of ``C`` to the sink, each with capacity
+    ``2 y_i``. A cut of value ``x(delta(S)) + 2 y(C - S) + 2 y(D & S)`` below 2 (``S`` the sink
+    side) is a violated ``Subtour(S, C, D)``: the separation is exact for that pair. From both
+    extreme minimum cuts, the pair ``C, D`` most violated for ``S`` is taken and ``S`` is lifted:
+    nodes with ``y = 0`` have no edges at the point, so those of ``C`` and of clusters whose
+    chosen nodes all lie in ``S`` join ``S``.
 
     Parameters
     ----------
@@ -278,46 +271,68 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     Returns
     -------
     Cuts or None
-        The lifted cuts still violated, cluster by cluster (a sink side once per cluster);
-        ``None`` when none is.
+        The cuts still violated, cluster by cluster (each ``S, C, D`` once); ``None`` when none is.
     """
     y, x = model.split(values)
     n, m = model.n_nodes, model.n_clusters
-    src, snk = n, n + 1
-    sup = x > ZERO
-    cap = np.round(x[sup] * _FLOW_SCALE).astype(np.int64)
-    a, b = model.tail[sup], model.head[sup]
-    by_size = np.argsort(np.bincount(model.cluster, minlength=m), kind="stable")
-    big = 4 * _FLOW_SCALE * (m + 1)
+    on = np.flatnonzero(y > ZERO)
+    k = len(on)
+    local = np.full(n, -1)
+    local[on] = np.arange(k)
+    sup = (x > ZERO) & (local[model.tail] >= 0) & (local[model.head] >= 0)
+    a, b, xs = local[model.tail[sup]], local[model.head[sup]], x[sup]
+    clus, ys = model.cluster[on], y[on]
+    src, snk = k, k + 1
+    # every arc once: support edges both ways, source -> node and node -> sink (capacity set
+    # per cluster); laid out as CSR by hand so each max-flow only swaps the capacities
+    rows = np.concatenate([a, b, np.full(k, src), np.arange(k)])
+    cols = np.concatenate([b, a, np.arange(k), np.full(k, snk)])
+    order = np.lexsort((cols, rows))
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=k + 2))]).astype(np.int32)
+    indices = cols[order].astype(np.int32)
+    where = np.empty(len(order), dtype=np.int64)
+    where[order] = np.arange(len(order))
+    e2 = 2 * len(a)
+    base = np.zeros(len(order), dtype=np.int32)
+    base[where[:e2]] = np.round(np.concatenate([xs, xs]) * _FLOW_SCALE).astype(np.int32)
+    at_src, at_snk = where[e2:e2 + k], where[e2 + k:]
+    ycap = np.round(2 * ys * _FLOW_SCALE).astype(np.int32)
+    top = np.zeros(m)
+    np.maximum.at(top, clus, ys)
     found: list[Cuts] = []
     seen: set[bytes] = set()
-    for c in range(m):
-        in_c = np.flatnonzero((model.cluster == c) & (y > ZERO))
-        if len(in_c) == 0:
-            continue
-        d = int(by_size[0] if by_size[0] != c else by_size[1])
-        in_d = np.flatnonzero(model.cluster == d)
-        rows = np.concatenate([a, b, np.full(len(in_d), src), in_c])
-        cols = np.concatenate([b, a, in_d, np.full(len(in_c), snk)])
-        caps = np.concatenate([cap, cap, np.full(len(in_d), big),
-                               np.round(2 * y[in_c] * _FLOW_SCALE).astype(np.int64)])
-        graph = sp.csr_array((caps.astype(np.int32), (rows, cols)), shape=(n + 2, n + 2))
-        graph.sum_duplicates()
-        graph.sort_indices()
+    for c in np.unique(clus):
+        in_c = np.flatnonzero(clus == c)
+        others = top.copy()
+        others[c] = -1.0
+        d = int(np.argmax(others))
+        in_d = np.flatnonzero(clus == d)
+        cap = base.copy()
+        cap[at_src[in_d]] = ycap[in_d]
+        cap[at_snk[in_c]] = ycap[in_c]
+        graph = sp.csr_array((cap, indices, indptr), shape=(k + 2, k + 2))
         value, sides = _min_cut_sides(graph, src, snk)
         if value >= (2 - TOL) * _FLOW_SCALE:
             continue
         for side in sides:
-            s = side[:n]
-            key = bytes(np.packbits(s)) + c.to_bytes(4, "little")
-            if key in seen or not s.any():
+            s = side[:k]
+            if not s.any() or s.all():
                 continue
-            seen.add(key)
-            cut = lifted_cut(model, s, y)
-            inside = cut.side[0]  # one side
-            lhs = x[inside[model.tail] & inside[model.head]].sum() + cut.ycoef[0] @ y
-            if lhs > cut.rhs[0] + TOL:
-                found.append(cut)
+            share = np.bincount(clus, weights=np.where(s, ys, 0.0), minlength=m)
+            hi, lo, diff = _best_pair(share)
+            if 2 * diff - xs[s[a] != s[b]].sum() <= TOL:
+                continue
+            full = np.zeros(n, dtype=bool)
+            full[on[s]] = True
+            full |= (y <= ZERO) & ((model.cluster == hi) | (share[model.cluster] >= 1 - ZERO))
+            full &= ~((model.cluster == lo) & (y <= ZERO))
+            s = full[on]  # (unchanged but for nodes of y at most ZERO)
+            if 2 * (share[hi] - share[lo]) - xs[s[a] != s[b]].sum() <= TOL:
+                continue
+            key = bytes(np.packbits(full)) + hi.to_bytes(4, "little") + lo.to_bytes(4, "little")
+            if key not in seen:
+                seen.add(key)
+                found.append(subtour_cut(model, full, hi, lo))
     return Cuts.stack(found) if found else None
 
 
