@@ -39,9 +39,11 @@ COLUMNS = ("group", "instance", "clusters", "nodes", "omega", "status", "objecti
 
 @dataclass(frozen=True)
 class Job:
-    """One solve to run: its group, instance, omega and (GTSPLIB) best-known value."""
+    """One solve to run: its group, name (GTSPLIB's, not the file's ``NAME``), instance, omega and
+    (GTSPLIB) best-known value."""
 
     group: str
+    name: str
     instance: Instance
     omega: float | None
     best: float | None = None
@@ -70,12 +72,12 @@ def jobs(args: argparse.Namespace) -> Iterator[Job]:
     """The solves asked for, GTSPLIB first (by size), then UAV by K, seed and omega."""
     refs = gtsplib.best_known()
     for name in gtsplib_names(args.gtsplib):
-        yield Job("GTSPLIB", gtsplib.read(name), None, refs[name].value)
+        yield Job("GTSPLIB", name, gtsplib.read(name), None, refs[name].value)
     for k in args.uav:
         for seed in args.seeds:
             inst = uav_instance(k, seed)
             for omega in args.omegas:
-                yield Job(f"UAV K={k}", inst, omega)
+                yield Job(f"UAV K={k}", inst.name, inst, omega)
 
 
 def gap_percent(row: Row) -> float:
@@ -97,7 +99,7 @@ def line(job: Job, row: Row) -> str:
     proven = "yes" if row.status == "optimal" else row.status
     omega = "" if job.omega is None else f"{job.omega:g}"
     best = "" if job.best is None else f"{job.best:.0f}"
-    return (f"{job.instance.name:<16} {job.instance.n_clusters:>4} {job.instance.n_nodes:>5} {omega:>5} "
+    return (f"{job.name:<16} {job.instance.n_clusters:>4} {job.instance.n_nodes:>5} {omega:>5} "
             f"{proven:>10} {row.runtime_s:>8.1f} {row.objective:>12.2f} {row.lower_bound:>12.2f} "
             f"{gap_percent(row):>7.3f} {best:>8} {match(row, job.best):>6}")
 
@@ -149,15 +151,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         row = solve(job.group, job.instance, job.omega, args.solver, args.time_limit, args.solver_seed)
         done.append((job, row))
         print(line(job, row), flush=True)
-        ref = refs.get(job.instance.name) if job.group == "GTSPLIB" else None
-        if ref is not None and row.status == "optimal" and ref.status == "optimal" and row.objective != ref.value:
+        ref = refs.get(job.name) if job.group == "GTSPLIB" else None
+        proven = ref is not None and ref.status == "optimal" and row.status == "optimal"
+        if proven and row.objective != ref.value:
             print(f"  DISAGREES with the proven optimum {ref.value:g}", flush=True)
             bad += 1
     print(*summary(done), sep="\n")
     print(f"{bad} disagreement(s) with proven optima; {time.perf_counter() - start:.0f} s in all")
     if args.csv:
         write_csv(args.csv, COLUMNS, (
-            [j.group, j.instance.name, j.instance.n_clusters, j.instance.n_nodes,
+            [j.group, j.name, j.instance.n_clusters, j.instance.n_nodes,
              "" if j.omega is None else j.omega, r.status, repr(r.objective), repr(r.lower_bound),
              f"{gap_percent(r):.4f}", f"{r.runtime_s:.2f}", "" if j.best is None else j.best,
              match(r, j.best)] for j, r in done))
