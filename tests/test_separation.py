@@ -133,3 +133,24 @@ def test_generalized_subtour_cut_holds_for_every_tour_and_is_tight():
         if inside.any():
             assert np.isclose(lhs[0, inside].max(), cut.rhs[0])
     assert len(forms) >= 3, forms  # both sides, with and without a whole cluster on one side
+
+
+def test_network_min_cut_sides_are_minimum_cuts():
+    """On random networks the two sides returned are minimum cuts: each separates source and
+    sink and its arcs leaving the source side carry exactly the max-flow value."""
+    from gtsp_bench.solvers.exact.mip.separation import _Network
+
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        size = int(rng.integers(4, 12))
+        pairs = {(int(u), int(v)) for u, v in rng.integers(0, size, (3 * size, 2)) if u < v}
+        tails, heads = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+        net, where = _Network.build(tails, heads, size)
+        cap = np.zeros(len(net.indices), dtype=np.int32)
+        cap[where] = rng.integers(0, 5, len(where))
+        cap[net.rev[where]] = rng.integers(0, 5, len(where))
+        value, sides = net.min_cut_sides(cap, 0, size - 1)
+        for sink_side in sides:
+            assert sink_side[size - 1] and not sink_side[0]
+            leaving = ~sink_side[net.row] & sink_side[net.indices]
+            assert cap[leaving].sum() == value

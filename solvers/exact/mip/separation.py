@@ -228,18 +228,61 @@ def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int, d: int | None =
     return Cuts.one(t, -t.astype(float) - (t & in_c) + (t & in_d), 0.0)
 
 
-def _min_cut_sides(graph: sp.csr_array, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
-    """Max-flow value and the sink sides of the two extreme minimum cuts (masks over nodes)."""
-    flow = maximum_flow(graph, source, sink, method="dinic")
-    residual = (graph - flow.flow).tocsr()
-    residual.data[residual.data < 0] = 0
-    residual.eliminate_zeros()
-    n = graph.shape[0]
-    from_source = np.zeros(n, dtype=bool)
-    from_source[breadth_first_order(residual, source, directed=True, return_predecessors=False)] = True
-    to_sink = np.zeros(n, dtype=bool)
-    to_sink[breadth_first_order(residual.T.tocsr(), sink, directed=True, return_predecessors=False)] = True
-    return float(flow.flow_value), [~from_source, to_sink]
+@dataclass(frozen=True)
+class _Network:
+    """A flow network laid out once as CSR, every arc with its reverse arc also present.
+
+    Attributes
+    ----------
+    indptr, indices
+        CSR structure over ``size`` nodes (rows sorted by column).
+    row
+        Tail node of each arc (CSR position).
+    rev
+        CSR position of each arc's reverse.
+    """
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    row: np.ndarray
+    rev: np.ndarray
+
+    @staticmethod
+    def build(tails: np.ndarray, heads: np.ndarray, size: int) -> tuple[_Network, np.ndarray]:
+        """The network of arcs ``tails -> heads`` and their reverses (none may be given twice);
+        also the CSR position of each given arc."""
+        rows, cols = np.concatenate([tails, heads]), np.concatenate([heads, tails])
+        order = np.lexsort((cols, rows))
+        where = np.empty(len(order), dtype=np.int64)
+        where[order] = np.arange(len(order))
+        g = len(tails)
+        rev = np.empty(len(order), dtype=np.int64)
+        rev[where] = where[np.concatenate([np.arange(g, 2 * g), np.arange(g)])]
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=size))]).astype(np.int32)
+        return _Network(indptr, cols[order].astype(np.int32), rows[order], rev), where[:g]
+
+    def _reach(self, open_arc: np.ndarray, start: int) -> np.ndarray:
+        size = len(self.indptr) - 1
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(self.row[open_arc], minlength=size))])
+        graph = sp.csr_array((np.ones(int(open_arc.sum()), dtype=np.int32), self.indices[open_arc],
+                              ptr.astype(np.int32)), shape=(size, size))
+        out = np.zeros(size, dtype=bool)
+        out[breadth_first_order(graph, start, directed=True, return_predecessors=False)] = True
+        return out
+
+    def min_cut_sides(self, cap: np.ndarray, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
+        """Max-flow value for capacities ``cap`` (per CSR position) and the sink sides of the
+        two extreme minimum cuts (masks over nodes)."""
+        size = len(self.indptr) - 1
+        graph = sp.csr_array((cap, self.indices, self.indptr), shape=(size, size))
+        flow = maximum_flow(graph, source, sink, method="dinic")
+        f = flow.flow
+        if not (np.array_equal(f.indptr, self.indptr) and np.array_equal(f.indices, self.indices)):
+            raise AssertionError("max-flow changed the network's layout")  # (every reverse is in)
+        residual = cap - f.data
+        from_source = self._reach(residual > 0, source)
+        to_sink = self._reach(residual[self.rev] > 0, sink)  # reversed arcs
+        return float(flow.flow_value), [~from_source, to_sink]
 
 
 def _best_pair(share: np.ndarray) -> tuple[int, int, float]:
@@ -283,19 +326,14 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     a, b, xs = local[model.tail[sup]], local[model.head[sup]], x[sup]
     clus, ys = model.cluster[on], y[on]
     src, snk = k, k + 1
-    # every arc once: support edges both ways, source -> node and node -> sink (capacity set
-    # per cluster); laid out as CSR by hand so each max-flow only swaps the capacities
-    rows = np.concatenate([a, b, np.full(k, src), np.arange(k)])
-    cols = np.concatenate([b, a, np.arange(k), np.full(k, snk)])
-    order = np.lexsort((cols, rows))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=k + 2))]).astype(np.int32)
-    indices = cols[order].astype(np.int32)
-    where = np.empty(len(order), dtype=np.int64)
-    where[order] = np.arange(len(order))
-    e2 = 2 * len(a)
-    base = np.zeros(len(order), dtype=np.int32)
-    base[where[:e2]] = np.round(np.concatenate([xs, xs]) * _FLOW_SCALE).astype(np.int32)
-    at_src, at_snk = where[e2:e2 + k], where[e2 + k:]
+    # support edges both ways, source -> node and node -> sink (capacities set per cluster),
+    # laid out once so that each max-flow only swaps the capacities
+    net, where = _Network.build(np.concatenate([a, np.full(k, src), np.arange(k)]),
+                                np.concatenate([b, np.arange(k), np.full(k, snk)]), k + 2)
+    e = len(a)
+    base = np.zeros(len(net.indices), dtype=np.int32)
+    base[where[:e]] = base[net.rev[where[:e]]] = np.round(xs * _FLOW_SCALE).astype(np.int32)
+    at_src, at_snk = where[e:e + k], where[e + k:]
     ycap = np.round(2 * ys * _FLOW_SCALE).astype(np.int32)
     top = np.zeros(m)
     np.maximum.at(top, clus, ys)
@@ -310,8 +348,7 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
         cap = base.copy()
         cap[at_src[in_d]] = ycap[in_d]
         cap[at_snk[in_c]] = ycap[in_c]
-        graph = sp.csr_array((cap, indices, indptr), shape=(k + 2, k + 2))
-        value, sides = _min_cut_sides(graph, src, snk)
+        value, sides = net.min_cut_sides(cap, src, snk)
         if value >= (2 - TOL) * _FLOW_SCALE:
             continue
         for side in sides:
