@@ -373,15 +373,41 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     return Cuts.stack(found) if found else None
 
 
+#: Largest handle grown from one cluster by :func:`blossom_cuts` (clusters).
+MAX_HANDLE = 40
+
+
+def _best_teeth(z: np.ndarray, handle: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """The odd tooth set ``F`` (edges leaving ``handle``) of the most violated blossom.
+
+    ``z(delta(H) - F) + sum_F (1 - z_e) >= 1`` for every odd ``F`` (a tour crosses ``H`` an even
+    number of times); ``F`` takes the edges with ``z_e > 1/2``, parity mended by the edge whose
+    ``z_e`` is closest to 1/2. Returns the violation (positive: violated) and ``F``'s ends.
+    """
+    inner, outer = np.flatnonzero(handle), np.flatnonzero(~handle)
+    cut = z[np.ix_(inner, outer)]
+    teeth = cut > 0.5
+    slack = np.where(teeth, 1 - cut, cut).sum()
+    if teeth.sum() % 2 == 0:
+        k = np.unravel_index(np.argmin(np.abs(1 - 2 * cut)), cut.shape)
+        slack += abs(1 - 2 * cut[k])
+        teeth[k] = ~teeth[k]
+    i, j = np.nonzero(teeth)
+    return 1 - slack, inner[i], outer[j]
+
+
 def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
-    """Violated blossoms of the tour over clusters, by the odd-component heuristic.
+    """Violated blossoms of the tour over clusters: handles grown along the fractional ``z``.
 
     ``z_CD = x(C : D)`` is a Hamiltonian cycle over the clusters, so the 2-matching (blossom)
-    inequalities of the TSP hold for it: for a handle ``H`` (clusters) and an odd number of
-    pairwise disjoint teeth ``T`` (cluster pairs with one end in ``H``),
-    ``z(E(H)) + z(T) <= |H| + (|T| - 1) / 2``. Handles are the connected components of the
-    fractional ``z``; teeth the pairs with ``z = 1`` leaving them (an outside cluster on two
-    teeth joins the handle). They close the half-integral root gaps the subtour cuts leave.
+    inequalities of the TSP hold for it: for a handle ``H`` (clusters) and an odd set ``F`` of
+    cluster pairs with one end in ``H`` (edge teeth; a tour crosses ``H`` an even number of
+    times, so they need not be disjoint), ``z(E(H)) + z(F) <= |H| + (|F| - 1) / 2``. Handles
+    tried: each connected component of the fractional ``z``, and the breadth-first prefixes
+    (3 clusters up to :data:`MAX_HANDLE`, and less than the component) of the component grown
+    from each of its clusters; teeth by :func:`_best_teeth`. Half-integral root points, whose
+    fractional edges form one large component with an even number of 1-edges leaving it, need
+    the prefixes.
 
     Parameters
     ----------
@@ -401,27 +427,34 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     np.add.at(z, (model.cluster[model.tail], model.cluster[model.head]), x)
     z += z.T
     frac = (z > TOL) & (z < 1 - TOL)
-    n_comp, label = connected_components(sp.csr_array(frac.astype(float)), directed=False)
+    graph = sp.csr_array(frac.astype(float))
+    n_comp, label = connected_components(graph, directed=False)
     found = []
+    seen: set[bytes] = set()
     for comp in range(n_comp):
-        handle = label == comp
-        if handle.sum() < 2:
+        members = np.flatnonzero(label == comp)
+        if len(members) < 2:
             continue
-        while True:
-            inner, outer = np.nonzero(handle[:, None] & ~handle[None, :] & (z > 1 - TOL))
-            shared = np.flatnonzero(np.bincount(outer, minlength=m) > 1)
-            if len(shared) == 0:
-                break
-            handle[shared] = True
-        k = len(inner)
-        if k % 2 == 0 or handle.all() or len(np.unique(inner)) < k:  # teeth must be disjoint
-            continue
-        lhs = z[np.ix_(handle, handle)].sum() / 2 + z[inner, outer].sum()
-        rhs = handle.sum() + (k - 1) / 2
-        if lhs > rhs + TOL:
-            sides = [np.isin(model.cluster, np.flatnonzero(handle))]
-            sides += [np.isin(model.cluster, [i, j]) for i, j in zip(inner, outer, strict=True)]
-            found.append(Cuts.one(np.array(sides), np.zeros(model.n_nodes), rhs))
+        handles = [label == comp]
+        for start in members:
+            order = breadth_first_order(graph, int(start), directed=False, return_predecessors=False)
+            for size in range(3, min(len(order), MAX_HANDLE + 1)):
+                h = np.zeros(m, dtype=bool)
+                h[order[:size]] = True
+                handles.append(h)
+        for handle in handles:
+            if handle.all():
+                continue
+            key = bytes(np.packbits(handle))
+            if key in seen:
+                continue
+            seen.add(key)
+            violation, inner, outer = _best_teeth(z, handle)
+            if violation > TOL:
+                sides = [np.isin(model.cluster, np.flatnonzero(handle))]
+                sides += [np.isin(model.cluster, [i, j]) for i, j in zip(inner, outer, strict=True)]
+                found.append(Cuts.one(np.array(sides), np.zeros(model.n_nodes),
+                                      handle.sum() + (len(inner) - 1) / 2))
     return Cuts.stack(found) if found else None
 
 
