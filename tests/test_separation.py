@@ -25,8 +25,8 @@ def _capture(monkeypatch) -> list[tuple[str, GtspModel, Cuts, np.ndarray]]:
     def recording(name: str):
         separator = getattr(separation, name)
 
-        def wrapped(model, values):
-            cuts = separator(model, values)
+        def wrapped(model, values, *args):
+            cuts = separator(model, values, *args)
             if cuts is not None:
                 seen.append((name, model, cuts, values.copy()))
             return cuts

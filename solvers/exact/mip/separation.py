@@ -1,4 +1,4 @@
-"""Cut rows and their separation: subtour rows of an integer point, lifted subtour cuts by
+"""Cut rows and their separation: subtour rows of an integer point, generalized subtour cuts by
 max-flow, node-cluster rows and blossoms at a fractional one.
 
 Every cut is ``x(E(side)) + sum_i a_i y_i <= b`` (a blossom sums ``x(E(side))`` over its handle
@@ -396,18 +396,19 @@ def _best_teeth(z: np.ndarray, handle: np.ndarray) -> tuple[float, np.ndarray, n
     return 1 - slack, inner[i], outer[j]
 
 
-def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
+def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True) -> Cuts | None:
     """Violated blossoms of the tour over clusters: handles grown along the fractional ``z``.
 
     ``z_CD = x(C : D)`` is a Hamiltonian cycle over the clusters, so the 2-matching (blossom)
     inequalities of the TSP hold for it: for a handle ``H`` (clusters) and an odd set ``F`` of
     cluster pairs with one end in ``H`` (edge teeth; a tour crosses ``H`` an even number of
     times, so they need not be disjoint), ``z(E(H)) + z(F) <= |H| + (|F| - 1) / 2``. Handles
-    tried: each connected component of the fractional ``z``, and the breadth-first prefixes
-    (3 clusters up to :data:`MAX_HANDLE`, and less than the component) of the component grown
-    from each of its clusters; teeth by :func:`_best_teeth`. Half-integral root points, whose
-    fractional edges form one large component with an even number of 1-edges leaving it, need
-    the prefixes.
+    tried: each connected component of the fractional ``z`` and, with ``grow``, the
+    breadth-first prefixes (3 clusters up to :data:`MAX_HANDLE`, and less than the component) of
+    the component grown from each of its clusters; teeth by :func:`_best_teeth`. Half-integral
+    root points, whose fractional edges form one large component with an even number of 1-edges
+    leaving it, need the prefixes; they cost tens of milliseconds a call, so the branch and cut
+    (31pr152: more nodes, a better bound in 120 s without them) leaves them out.
 
     Parameters
     ----------
@@ -415,6 +416,8 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
         The model.
     values
         A fractional point (a full model column vector).
+    grow
+        Also try the grown handles.
 
     Returns
     -------
@@ -436,7 +439,7 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
         if len(members) < 2:
             continue
         handles = [label == comp]
-        for start in members:
+        for start in members if grow else ():
             order = breadth_first_order(graph, int(start), directed=False, return_predecessors=False)
             for size in range(3, min(len(order), MAX_HANDLE + 1)):
                 h = np.zeros(m, dtype=bool)
@@ -468,14 +471,15 @@ def separate(model: GtspModel, values: np.ndarray, *, thorough: bool = True) -> 
     values
         A fractional point (a full model column vector).
     thorough
-        Run the max-flows always; when false, only if the cheap families find nothing.
+        Run the max-flows always and grow blossom handles (the root); when false (branch and cut
+        nodes), max-flows only if the cheap families find nothing, blossom handles not grown.
 
     Returns
     -------
     Cuts or None
         Node-cluster rows, then blossoms, then flow cuts; ``None`` when none is violated.
     """
-    found = [c for c in (node_cluster_cuts(model, values), blossom_cuts(model, values))
+    found = [c for c in (node_cluster_cuts(model, values), blossom_cuts(model, values, thorough))
              if c is not None]
     if thorough or not found:
         flows = flow_cuts(model, values)
