@@ -112,6 +112,18 @@ def test_time_limit_gives_tour_and_bound(time_limit):
     assert r.runtime_s < time_limit + 4.0
 
 
+@pytest.mark.parametrize("omega", [0.0, 0.9])
+def test_tiny_time_limit_bound_is_below_the_dp_optimum(omega):
+    """Stopped after 0.02 s (before the root LP loop ends) on a K = 10 instance: status
+    time_limit, a tour no better than the dp optimum and a bound not above it."""
+    inst = generate_instance(10, 20, seed=3)
+    opt = run_solver("dp", inst, omega).objective
+    r = run_solver("milp", inst, omega, time_limit=0.02)
+    assert r.status == "time_limit"
+    assert 0 < r.lower_bound <= opt + 1e-9
+    assert r.objective >= opt - 1e-9
+
+
 def test_bad_options_and_input_are_refused():
     """Options are checked when the solver is built; an asymmetric matrix is refused."""
     with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):

@@ -25,8 +25,8 @@ def _capture(monkeypatch) -> list[tuple[str, GtspModel, Cuts, np.ndarray]]:
     def recording(name: str):
         separator = getattr(separation, name)
 
-        def wrapped(model, values):
-            cuts = separator(model, values)
+        def wrapped(model, values, *args):
+            cuts = separator(model, values, *args)
             if cuts is not None:
                 seen.append((name, model, cuts, values.copy()))
             return cuts
@@ -108,3 +108,49 @@ def test_stack_select_and_matrix_keep_rows_with_several_sides():
         on_edge, on_y = cuts.dual_weights(model, duals, edges)
         np.testing.assert_allclose(on_edge, duals @ cuts.matrix(model, n + edges))
         np.testing.assert_allclose(on_y, duals @ cuts.ycoef)
+
+
+def test_generalized_subtour_cut_holds_for_every_tour_and_is_tight():
+    """``Subtour(S, C, D)`` for random node sets (splitting clusters, on either side's form)
+    holds for every tour, and some tour with its heads of C inside S and of D outside meets it
+    at equality (it crosses S exactly twice)."""
+    from gtsp_bench.solvers.exact.mip.separation import subtour_cut
+
+    rng = np.random.default_rng(3)
+    model = _model(7, k=5, max_size=3)
+    tours = _all_tours(model)
+    cols = np.arange(model.n_cols)
+    forms = Counter()
+    for _ in range(60):
+        s = rng.random(model.n_nodes) < rng.uniform(0.2, 0.8)
+        c, d = rng.choice(model.n_clusters, 2, replace=False)
+        cut = subtour_cut(model, s, int(c), int(d))
+        lhs = cut.matrix(model, cols) @ tours.T
+        assert np.all(lhs <= cut.rhs[:, None] + 1e-9)
+        forms[(bool(np.array_equal(cut.side[0], s)), float(cut.rhs[0]))] += 1
+        y = tours[:, :model.n_nodes]
+        inside = (y[:, s & (model.cluster == c)].sum(1) == 1) & (y[:, ~s & (model.cluster == d)].sum(1) == 1)
+        if inside.any():
+            assert np.isclose(lhs[0, inside].max(), cut.rhs[0])
+    assert len(forms) >= 3, forms  # both sides, with and without a whole cluster on one side
+
+
+def test_network_min_cut_sides_are_minimum_cuts():
+    """On random networks the two sides returned are minimum cuts: each separates source and
+    sink and its arcs leaving the source side carry exactly the max-flow value."""
+    from gtsp_bench.solvers.exact.mip.separation import _Network
+
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        size = int(rng.integers(4, 12))
+        pairs = {(int(u), int(v)) for u, v in rng.integers(0, size, (3 * size, 2)) if u < v}
+        tails, heads = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+        net, where = _Network.build(tails, heads, size)
+        cap = np.zeros(len(net.indices), dtype=np.int32)
+        cap[where] = rng.integers(0, 5, len(where))
+        cap[net.rev[where]] = rng.integers(0, 5, len(where))
+        value, sides = net.min_cut_sides(cap, 0, size - 1)
+        for sink_side in sides:
+            assert sink_side[size - 1] and not sink_side[0]
+            leaving = ~sink_side[net.row] & sink_side[net.indices]
+            assert cap[leaving].sum() == value

@@ -8,10 +8,11 @@ Formulation over the candidate heads left by :func:`gtsp_bench.solvers.exact.pru
 * minimise ``sum_i node_cost_i y_i + sum_e edge_cost_e x_e``;
 * ``Cluster(C)``: ``y(C) = 1`` for every cluster;
 * ``Degree(i)``: ``x(delta(i)) = 2 y_i``;
-* ``Subtour(S, C)``, added as cuts: ``x(delta(S)) >= 2 y(S & C)`` for a node set ``S`` that
-  misses a whole cluster and any cluster ``C``. With the degree rows it is written over the edges
-  inside the smaller of the two sides (fewer nonzeros): ``x(E(S)) <= y(S - C)`` or
-  ``x(E(T)) <= y(T) + y(T & C) - 1`` with ``T = V - S``. Every cut is thus
+* ``Subtour(S, C, D)``, added as cuts: ``x(delta(S)) >= 2 (y(S & C) + y(D - S) - 1)`` for any
+  node set ``S`` and clusters ``C != D`` (when ``S`` misses the whole of ``D``:
+  ``x(delta(S)) >= 2 y(S & C)``). With the degree rows it is written over the edges inside the
+  smaller of the two sides (fewer nonzeros): ``x(E(S)) <= y(S - C) + y(S & D)`` or
+  ``x(E(T)) <= y(T) + y(T & C) - y(T & D)`` with ``T = V - S``. Every cut is thus
   ``x(E(side)) + sum_i a_i y_i <= b``: a :class:`~gtsp_bench.solvers.exact.mip.separation.Cuts`
   block stores ``side``, ``a`` and ``b``.
 
@@ -29,8 +30,9 @@ of the GTSP):
 3. a root loop on the LP relaxation over a core of cheap edges: columns of negative reduced cost
    are priced in, columns whose reduced cost exceeds the gap to the upper bound are fixed to 0,
    and violated cuts are separated at the fractional solution: node-cluster rows
-   ``x(i : D) <= y_i`` by enumeration, lifted subtour cuts by one max-flow per cluster, and
-   blossoms of the tour over the clusters by the odd-component heuristic; slack cuts are purged;
+   ``x(i : D) <= y_i`` by enumeration, generalized subtour cuts by one max-flow per cluster on
+   the support graph (exact for that cluster and a source cluster), and blossoms of the tour
+   over the clusters (handles grown along its fractional part); slack cuts are purged;
 4. unless the root proved the upper bound optimal, branch and cut with the backend as LP solver:
    best first with diving, the same cuts, pricing and reduced-cost fixing at every node,
    branching on ``y`` first. A backend with lazy constraints (Gurobi) solves the MILP itself
@@ -48,7 +50,7 @@ Modules, each importing only the ones above it:
 * :mod:`~gtsp_bench.solvers.exact.mip.model`: the numerical tolerances, :class:`GtspModel` (columns,
   base rows, cycles and tour of an integer point), :func:`build_model`, the core columns;
 * :mod:`~gtsp_bench.solvers.exact.mip.separation`: :class:`Cuts` and the separators (subtour
-  rows of an integer point, lifted subtour cuts by max-flow, node-cluster rows, blossoms,
+  rows of an integer point, generalized subtour cuts by max-flow, node-cluster rows, blossoms,
   :func:`separate`);
 * :mod:`~gtsp_bench.solvers.exact.mip.backends`: LP/MIP results, the ``Backend`` and
   ``LazyMipBackend`` protocols, :class:`LpModel` (the model held in a backend) and the HiGHS and

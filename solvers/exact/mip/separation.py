@@ -1,4 +1,4 @@
-"""Cut rows and their separation: subtour rows of an integer point, lifted subtour cuts by
+"""Cut rows and their separation: subtour rows of an integer point, generalized subtour cuts by
 max-flow, node-cluster rows and blossoms at a fractional one.
 
 Every cut is ``x(E(side)) + sum_i a_i y_i <= b`` (a blossom sums ``x(E(side))`` over its handle
@@ -119,70 +119,6 @@ class Cuts:
         return pair[model.tail[edges], model.head[edges]], on_y
 
 
-def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int) -> Cuts:
-    """``Subtour(S, C)`` for ``S = sink_side``, over the side with fewer inside edges.
-
-    ``S`` must miss a whole cluster. Over ``S``: ``x(E(S)) - y(S - C) <= 0`` (when ``S`` holds
-    all of ``C``: ``x(E(S)) - y(S) <= -1``); over ``T = V - S``: ``x(E(T)) - y(T) - y(T & C)
-    <= -1``.
-
-    Parameters
-    ----------
-    model
-        The model.
-    sink_side
-        ``(n_nodes,)`` bool mask of ``S``.
-    c
-        The cluster ``C``.
-
-    Returns
-    -------
-    Cuts
-        One row.
-    """
-    in_c = model.cluster == c
-    s, t = sink_side, ~sink_side
-    edges_s = np.count_nonzero(s[model.tail] & s[model.head])
-    edges_t = np.count_nonzero(t[model.tail] & t[model.head])
-    if edges_s <= edges_t:
-        if not (in_c & t).any():
-            return Cuts.one(s, -s.astype(float), -1.0)
-        return Cuts.one(s, -(s & ~in_c).astype(float), 0.0)
-    return Cuts.one(t, -t.astype(float) - (t & in_c), -1.0)
-
-
-def lifted_cut(model: GtspModel, sink_side: np.ndarray, y: np.ndarray) -> Cuts:
-    """The strongest-looking ``Subtour(S', C)`` at ``y`` for a cut with sink side ``S``.
-
-    Nodes with ``y_i = 0`` have no edges at the current point, so moving them does not change
-    ``x(delta(S))`` there: every cluster whose chosen nodes all lie in ``S`` joins ``S`` whole,
-    which makes the right-hand side 2. Otherwise ``C`` is the cluster with the largest
-    ``y(S & C)``.
-
-    Parameters
-    ----------
-    model
-        The model.
-    sink_side
-        ``(n_nodes,)`` bool mask of ``S``.
-    y
-        The ``y`` part of the point.
-
-    Returns
-    -------
-    Cuts
-        One row, from :func:`subtour_cut`.
-    """
-    m = model.n_clusters
-    outside = np.bincount(model.cluster[(y > ZERO) & ~sink_side], minlength=m)
-    s = sink_side | (outside[model.cluster] == 0)
-    full = np.flatnonzero(outside == 0)
-    if len(full):
-        return subtour_cut(model, s, int(full[0]))
-    inside = np.bincount(model.cluster, weights=np.where(s, y, 0.0), minlength=m)
-    return subtour_cut(model, s, int(np.argmax(inside)))
-
-
 def subtour_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     """Cuts removing an integer solution with subtours (``None`` if it is one tour).
 
@@ -245,28 +181,128 @@ def node_cluster_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     return Cuts(side, r, ycoef, np.zeros(len(viol)))
 
 
-def _min_cut_sides(graph: sp.csr_array, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
-    """Max-flow value and the sink sides of the two extreme minimum cuts (masks over nodes)."""
-    flow = maximum_flow(graph, source, sink, method="dinic")
-    residual = (graph - flow.flow).tocsr()
-    residual.data[residual.data < 0] = 0
-    residual.eliminate_zeros()
-    n = graph.shape[0]
-    from_source = np.zeros(n, dtype=bool)
-    from_source[breadth_first_order(residual, source, directed=True, return_predecessors=False)] = True
-    to_sink = np.zeros(n, dtype=bool)
-    to_sink[breadth_first_order(residual.T.tocsr(), sink, directed=True, return_predecessors=False)] = True
-    return float(flow.flow_value), [~from_source, to_sink]
+def subtour_cut(model: GtspModel, sink_side: np.ndarray, c: int, d: int | None = None) -> Cuts:
+    """``Subtour(S, C, D)`` for ``S = sink_side``, over the side with fewer inside edges.
+
+    The generalized subtour inequality ``x(delta(S)) >= 2 (y(S & C) + y(D - S) - 1)`` for any
+    node set ``S`` and clusters ``C != D`` (a tour with its heads of ``C`` inside and of ``D``
+    outside crosses ``S`` twice). With the degree rows, over ``S``: ``x(E(S)) - y(S - C) -
+    y(S & D) <= 0`` (when ``S`` holds all of ``C``: ``x(E(S)) - y(S) - y(S & D) <= -1``); over
+    ``T = V - S``: ``x(E(T)) - y(T) - y(T & C) + y(T & D) <= 0`` (when ``T`` holds all of ``D``:
+    ``x(E(T)) - y(T) - y(T & C) <= -1``). When ``S`` misses a whole cluster ``D`` this is
+    ``x(delta(S)) >= 2 y(S & C)``.
+
+    Parameters
+    ----------
+    model
+        The model.
+    sink_side
+        ``(n_nodes,)`` bool mask of ``S``.
+    c
+        The cluster ``C``.
+    d
+        The cluster ``D`` (``None``: ``S`` must miss a whole cluster, which is taken).
+
+    Returns
+    -------
+    Cuts
+        One row.
+    """
+    m = model.n_clusters
+    s, t = sink_side, ~sink_side
+    in_s = np.bincount(model.cluster[s], minlength=m)
+    if d is None:
+        d = int(np.flatnonzero(in_s == 0)[0])
+    in_c, in_d = model.cluster == c, model.cluster == d
+    # edges with both ends in a side: its node pairs minus those inside one cluster
+    in_t = np.bincount(model.cluster[t], minlength=m)
+    edges_s = int(in_s.sum()) ** 2 - int((in_s**2).sum())
+    edges_t = int(in_t.sum()) ** 2 - int((in_t**2).sum())
+    if edges_s <= edges_t:
+        both = -(s & in_d).astype(float)
+        if not (in_c & t).any():
+            return Cuts.one(s, both - s, -1.0)
+        return Cuts.one(s, both - (s & ~in_c), 0.0)
+    if not (in_d & s).any():
+        return Cuts.one(t, -t.astype(float) - (t & in_c), -1.0)
+    return Cuts.one(t, -t.astype(float) - (t & in_c) + (t & in_d), 0.0)
+
+
+@dataclass(frozen=True)
+class _Network:
+    """A flow network laid out once as CSR, every arc with its reverse arc also present.
+
+    Attributes
+    ----------
+    indptr, indices
+        CSR structure over ``size`` nodes (rows sorted by column).
+    row
+        Tail node of each arc (CSR position).
+    rev
+        CSR position of each arc's reverse.
+    """
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    row: np.ndarray
+    rev: np.ndarray
+
+    @staticmethod
+    def build(tails: np.ndarray, heads: np.ndarray, size: int) -> tuple[_Network, np.ndarray]:
+        """The network of arcs ``tails -> heads`` and their reverses (none may be given twice);
+        also the CSR position of each given arc."""
+        rows, cols = np.concatenate([tails, heads]), np.concatenate([heads, tails])
+        order = np.lexsort((cols, rows))
+        where = np.empty(len(order), dtype=np.int64)
+        where[order] = np.arange(len(order))
+        g = len(tails)
+        rev = np.empty(len(order), dtype=np.int64)
+        rev[where] = where[np.concatenate([np.arange(g, 2 * g), np.arange(g)])]
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=size))]).astype(np.int32)
+        return _Network(indptr, cols[order].astype(np.int32), rows[order], rev), where[:g]
+
+    def _reach(self, open_arc: np.ndarray, start: int) -> np.ndarray:
+        size = len(self.indptr) - 1
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(self.row[open_arc], minlength=size))])
+        graph = sp.csr_array((np.ones(int(open_arc.sum()), dtype=np.int32), self.indices[open_arc],
+                              ptr.astype(np.int32)), shape=(size, size))
+        out = np.zeros(size, dtype=bool)
+        out[breadth_first_order(graph, start, directed=True, return_predecessors=False)] = True
+        return out
+
+    def min_cut_sides(self, cap: np.ndarray, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
+        """Max-flow value for capacities ``cap`` (per CSR position) and the sink sides of the
+        two extreme minimum cuts (masks over nodes)."""
+        size = len(self.indptr) - 1
+        graph = sp.csr_array((cap, self.indices, self.indptr), shape=(size, size))
+        flow = maximum_flow(graph, source, sink, method="dinic")
+        f = flow.flow
+        if not (np.array_equal(f.indptr, self.indptr) and np.array_equal(f.indices, self.indices)):
+            raise AssertionError("max-flow changed the network's layout")  # (every reverse is in)
+        residual = cap - f.data
+        from_source = self._reach(residual > 0, source)
+        to_sink = self._reach(residual[self.rev] > 0, sink)  # reversed arcs
+        return float(flow.flow_value), [~from_source, to_sink]
+
+
+def _best_pair(share: np.ndarray) -> tuple[int, int, float]:
+    """Clusters ``C != D`` maximising ``y(S & C) - y(D & S)`` for ``share[k] = y(S & k)``."""
+    order = np.argsort(share, kind="stable")
+    hi, lo = int(order[-1]), int(order[0])
+    return hi, lo, float(share[hi] - share[lo])
 
 
 def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
-    """Violated ``Subtour(S, C)`` cuts at a fractional solution, by one max-flow per cluster.
+    """Violated generalized subtour cuts at a fractional solution, one max-flow per cluster.
 
-    For cluster ``C``, a source cluster ``D != C`` (the smallest: the depot when there is one) is
-    tied to the source and each node ``i`` of ``C`` to the sink with capacity ``2 y_i``; edges
-    carry ``x_e`` both ways. A cut of value below 2 is a violated cut: ``x(delta(S)) + 2 y(C - S)
-    < 2`` with ``S`` the sink side, which misses ``D``. Cuts from both extreme minimum cuts are
-    returned, lifted by :func:`lifted_cut`.
+    On the support graph (nodes with ``y > 0``; edges carry ``x_e`` both ways), for cluster
+    ``C`` the nodes of a source cluster ``D`` (the one with the largest ``y``, the depot when
+    there is one) are tied to the source and those of ``C`` to the sink, each with capacity
+    ``2 y_i``. A cut of value ``x(delta(S)) + 2 y(C - S) + 2 y(D & S)`` below 2 (``S`` the sink
+    side) is a violated ``Subtour(S, C, D)``: the separation is exact for that pair. From both
+    extreme minimum cuts, the pair ``C, D`` most violated for ``S`` is taken and ``S`` is lifted:
+    nodes with ``y = 0`` have no edges at the point, so those of ``C`` and of clusters whose
+    chosen nodes all lie in ``S`` join ``S``.
 
     Parameters
     ----------
@@ -278,58 +314,101 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     Returns
     -------
     Cuts or None
-        The lifted cuts still violated, cluster by cluster (a sink side once per cluster);
-        ``None`` when none is.
+        The cuts still violated, cluster by cluster (each ``S, C, D`` once); ``None`` when none is.
     """
     y, x = model.split(values)
     n, m = model.n_nodes, model.n_clusters
-    src, snk = n, n + 1
-    sup = x > ZERO
-    cap = np.round(x[sup] * _FLOW_SCALE).astype(np.int64)
-    a, b = model.tail[sup], model.head[sup]
-    by_size = np.argsort(np.bincount(model.cluster, minlength=m), kind="stable")
-    big = 4 * _FLOW_SCALE * (m + 1)
+    on = np.flatnonzero(y > ZERO)
+    k = len(on)
+    local = np.full(n, -1)
+    local[on] = np.arange(k)
+    sup = (x > ZERO) & (local[model.tail] >= 0) & (local[model.head] >= 0)
+    a, b, xs = local[model.tail[sup]], local[model.head[sup]], x[sup]
+    clus, ys = model.cluster[on], y[on]
+    src, snk = k, k + 1
+    # support edges both ways, source -> node and node -> sink (capacities set per cluster),
+    # laid out once so that each max-flow only swaps the capacities
+    net, where = _Network.build(np.concatenate([a, np.full(k, src), np.arange(k)]),
+                                np.concatenate([b, np.arange(k), np.full(k, snk)]), k + 2)
+    e = len(a)
+    base = np.zeros(len(net.indices), dtype=np.int32)
+    base[where[:e]] = base[net.rev[where[:e]]] = np.round(xs * _FLOW_SCALE).astype(np.int32)
+    at_src, at_snk = where[e:e + k], where[e + k:]
+    ycap = np.round(2 * ys * _FLOW_SCALE).astype(np.int32)
+    top = np.zeros(m)
+    np.maximum.at(top, clus, ys)
     found: list[Cuts] = []
     seen: set[bytes] = set()
-    for c in range(m):
-        in_c = np.flatnonzero((model.cluster == c) & (y > ZERO))
-        if len(in_c) == 0:
-            continue
-        d = int(by_size[0] if by_size[0] != c else by_size[1])
-        in_d = np.flatnonzero(model.cluster == d)
-        rows = np.concatenate([a, b, np.full(len(in_d), src), in_c])
-        cols = np.concatenate([b, a, in_d, np.full(len(in_c), snk)])
-        caps = np.concatenate([cap, cap, np.full(len(in_d), big),
-                               np.round(2 * y[in_c] * _FLOW_SCALE).astype(np.int64)])
-        graph = sp.csr_array((caps.astype(np.int32), (rows, cols)), shape=(n + 2, n + 2))
-        graph.sum_duplicates()
-        graph.sort_indices()
-        value, sides = _min_cut_sides(graph, src, snk)
+    for c in np.unique(clus):
+        in_c = np.flatnonzero(clus == c)
+        others = top.copy()
+        others[c] = -1.0
+        d = int(np.argmax(others))
+        in_d = np.flatnonzero(clus == d)
+        cap = base.copy()
+        cap[at_src[in_d]] = ycap[in_d]
+        cap[at_snk[in_c]] = ycap[in_c]
+        value, sides = net.min_cut_sides(cap, src, snk)
         if value >= (2 - TOL) * _FLOW_SCALE:
             continue
         for side in sides:
-            s = side[:n]
-            key = bytes(np.packbits(s)) + c.to_bytes(4, "little")
-            if key in seen or not s.any():
+            s = side[:k]
+            if not s.any() or s.all():
                 continue
-            seen.add(key)
-            cut = lifted_cut(model, s, y)
-            inside = cut.side[0]  # one side
-            lhs = x[inside[model.tail] & inside[model.head]].sum() + cut.ycoef[0] @ y
-            if lhs > cut.rhs[0] + TOL:
-                found.append(cut)
+            share = np.bincount(clus, weights=np.where(s, ys, 0.0), minlength=m)
+            hi, lo, diff = _best_pair(share)
+            if 2 * diff - xs[s[a] != s[b]].sum() <= TOL:
+                continue
+            full = np.zeros(n, dtype=bool)
+            full[on[s]] = True
+            full |= (y <= ZERO) & ((model.cluster == hi) | (share[model.cluster] >= 1 - ZERO))
+            full &= ~((model.cluster == lo) & (y <= ZERO))
+            s = full[on]  # (unchanged but for nodes of y at most ZERO)
+            if 2 * (share[hi] - share[lo]) - xs[s[a] != s[b]].sum() <= TOL:
+                continue
+            key = bytes(np.packbits(full)) + hi.to_bytes(4, "little") + lo.to_bytes(4, "little")
+            if key not in seen:
+                seen.add(key)
+                found.append(subtour_cut(model, full, hi, lo))
     return Cuts.stack(found) if found else None
 
 
-def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
-    """Violated blossoms of the tour over clusters, by the odd-component heuristic.
+#: Largest handle grown from one cluster by :func:`blossom_cuts` (clusters).
+MAX_HANDLE = 40
+
+
+def _best_teeth(z: np.ndarray, handle: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """The odd tooth set ``F`` (edges leaving ``handle``) of the most violated blossom.
+
+    ``z(delta(H) - F) + sum_F (1 - z_e) >= 1`` for every odd ``F`` (a tour crosses ``H`` an even
+    number of times); ``F`` takes the edges with ``z_e > 1/2``, parity mended by the edge whose
+    ``z_e`` is closest to 1/2. Returns the violation (positive: violated) and ``F``'s ends.
+    """
+    inner, outer = np.flatnonzero(handle), np.flatnonzero(~handle)
+    cut = z[np.ix_(inner, outer)]
+    teeth = cut > 0.5
+    slack = np.where(teeth, 1 - cut, cut).sum()
+    if teeth.sum() % 2 == 0:
+        k = np.unravel_index(np.argmin(np.abs(1 - 2 * cut)), cut.shape)
+        slack += abs(1 - 2 * cut[k])
+        teeth[k] = ~teeth[k]
+    i, j = np.nonzero(teeth)
+    return 1 - slack, inner[i], outer[j]
+
+
+def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True) -> Cuts | None:
+    """Violated blossoms of the tour over clusters: handles grown along the fractional ``z``.
 
     ``z_CD = x(C : D)`` is a Hamiltonian cycle over the clusters, so the 2-matching (blossom)
-    inequalities of the TSP hold for it: for a handle ``H`` (clusters) and an odd number of
-    pairwise disjoint teeth ``T`` (cluster pairs with one end in ``H``),
-    ``z(E(H)) + z(T) <= |H| + (|T| - 1) / 2``. Handles are the connected components of the
-    fractional ``z``; teeth the pairs with ``z = 1`` leaving them (an outside cluster on two
-    teeth joins the handle). They close the half-integral root gaps the subtour cuts leave.
+    inequalities of the TSP hold for it: for a handle ``H`` (clusters) and an odd set ``F`` of
+    cluster pairs with one end in ``H`` (edge teeth; a tour crosses ``H`` an even number of
+    times, so they need not be disjoint), ``z(E(H)) + z(F) <= |H| + (|F| - 1) / 2``. Handles
+    tried: each connected component of the fractional ``z`` and, with ``grow``, the
+    breadth-first prefixes (3 clusters up to :data:`MAX_HANDLE`, and less than the component) of
+    the component grown from each of its clusters; teeth by :func:`_best_teeth`. Half-integral
+    root points, whose fractional edges form one large component with an even number of 1-edges
+    leaving it, need the prefixes; they cost tens of milliseconds a call, so the branch and cut
+    (31pr152: more nodes, a better bound in 120 s without them) leaves them out.
 
     Parameters
     ----------
@@ -337,6 +416,8 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
         The model.
     values
         A fractional point (a full model column vector).
+    grow
+        Also try the grown handles.
 
     Returns
     -------
@@ -349,27 +430,34 @@ def blossom_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     np.add.at(z, (model.cluster[model.tail], model.cluster[model.head]), x)
     z += z.T
     frac = (z > TOL) & (z < 1 - TOL)
-    n_comp, label = connected_components(sp.csr_array(frac.astype(float)), directed=False)
+    graph = sp.csr_array(frac.astype(float))
+    n_comp, label = connected_components(graph, directed=False)
     found = []
+    seen: set[bytes] = set()
     for comp in range(n_comp):
-        handle = label == comp
-        if handle.sum() < 2:
+        members = np.flatnonzero(label == comp)
+        if len(members) < 2:
             continue
-        while True:
-            inner, outer = np.nonzero(handle[:, None] & ~handle[None, :] & (z > 1 - TOL))
-            shared = np.flatnonzero(np.bincount(outer, minlength=m) > 1)
-            if len(shared) == 0:
-                break
-            handle[shared] = True
-        k = len(inner)
-        if k % 2 == 0 or handle.all() or len(np.unique(inner)) < k:  # teeth must be disjoint
-            continue
-        lhs = z[np.ix_(handle, handle)].sum() / 2 + z[inner, outer].sum()
-        rhs = handle.sum() + (k - 1) / 2
-        if lhs > rhs + TOL:
-            sides = [np.isin(model.cluster, np.flatnonzero(handle))]
-            sides += [np.isin(model.cluster, [i, j]) for i, j in zip(inner, outer, strict=True)]
-            found.append(Cuts.one(np.array(sides), np.zeros(model.n_nodes), rhs))
+        handles = [label == comp]
+        for start in members if grow else ():
+            order = breadth_first_order(graph, int(start), directed=False, return_predecessors=False)
+            for size in range(3, min(len(order), MAX_HANDLE + 1)):
+                h = np.zeros(m, dtype=bool)
+                h[order[:size]] = True
+                handles.append(h)
+        for handle in handles:
+            if handle.all():
+                continue
+            key = bytes(np.packbits(handle))
+            if key in seen:
+                continue
+            seen.add(key)
+            violation, inner, outer = _best_teeth(z, handle)
+            if violation > TOL:
+                sides = [np.isin(model.cluster, np.flatnonzero(handle))]
+                sides += [np.isin(model.cluster, [i, j]) for i, j in zip(inner, outer, strict=True)]
+                found.append(Cuts.one(np.array(sides), np.zeros(model.n_nodes),
+                                      handle.sum() + (len(inner) - 1) / 2))
     return Cuts.stack(found) if found else None
 
 
@@ -383,14 +471,15 @@ def separate(model: GtspModel, values: np.ndarray, *, thorough: bool = True) -> 
     values
         A fractional point (a full model column vector).
     thorough
-        Run the max-flows always; when false, only if the cheap families find nothing.
+        Run the max-flows always and grow blossom handles (the root); when false (branch and cut
+        nodes), max-flows only if the cheap families find nothing, blossom handles not grown.
 
     Returns
     -------
     Cuts or None
         Node-cluster rows, then blossoms, then flow cuts; ``None`` when none is violated.
     """
-    found = [c for c in (node_cluster_cuts(model, values), blossom_cuts(model, values))
+    found = [c for c in (node_cluster_cuts(model, values), blossom_cuts(model, values, thorough))
              if c is not None]
     if thorough or not found:
         flows = flow_cuts(model, values)

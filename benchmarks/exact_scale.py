@@ -1,0 +1,171 @@
+"""Exact at scale: ``milp`` on GTSPLIB and on large generated UAV instances.
+
+One line per solve, printed as it finishes (instance, proven or not, time, objective, bound, gap),
+then a summary per group (proven count and median time to proof) and, with ``--csv``, the rows.
+
+    python benchmarks/exact_scale.py --time-limit 120                     # GTSPLIB <= 442 nodes
+    python benchmarks/exact_scale.py --gtsplib none --uav 20,50 --time-limit 600
+    python benchmarks/exact_scale.py --gtsplib large --time-limit 3600    # 493-1,084 nodes
+
+GTSPLIB: the symmetric instances (``small``: the 63 with at most 442 nodes, whose optima are
+proven in the literature; ``large``: the 20 of 493-1,084 nodes; ``all``; ``none``; or a
+comma-separated list of names). UAV: ``gtsp-bench generate``'s instances, N = 20 nodes per
+cluster, zeta = 50 m, area 1000 m (2000 m from K = 100 on), depot at the middle of the bottom
+edge, seeds ``--seeds``, each at every omega of ``--omegas``.
+
+The gap is ``(objective - bound) / objective``; a proven optimum has gap 0. For GTSPLIB the best
+known value is shown and ``match`` says whether the objective equals it (``BETTER`` below it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+from gtsp_bench import gtsplib
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.instance import Instance
+from gtsp_bench.tables import Row, solve, write_csv
+
+#: Node counts of the two GTSPLIB groups (symmetric instances only).
+SMALL_NODES, LARGE_NODES = 442, 1084
+COLUMNS = ("group", "instance", "clusters", "nodes", "omega", "status", "objective", "lower_bound",
+           "gap_percent", "runtime_s", "best_known", "match")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One solve to run: its group, name (GTSPLIB's, not the file's ``NAME``), instance, omega and
+    (GTSPLIB) best-known value."""
+
+    group: str
+    name: str
+    instance: Instance
+    omega: float | None
+    best: float | None = None
+
+
+def gtsplib_names(which: str) -> list[str]:
+    """Symmetric GTSPLIB instances: ``small``, ``large``, ``all``, ``none`` or a list of names."""
+    refs = [r for r in gtsplib.best_known().values() if r.type == "GTSP"]
+    refs.sort(key=lambda r: (r.nodes, r.name))
+    if which == "none":
+        return []
+    if which in ("small", "large", "all"):
+        lo, hi = {"small": (0, SMALL_NODES), "large": (SMALL_NODES + 1, LARGE_NODES),
+                  "all": (0, LARGE_NODES)}[which]
+        return [r.name for r in refs if lo <= r.nodes <= hi]
+    return [name.strip() for name in which.split(",") if name.strip()]
+
+
+def uav_instance(k: int, seed: int) -> Instance:
+    """The generated UAV instance of K clusters (N = 20) and this seed."""
+    area = 1000.0 if k < 100 else 2000.0
+    return generate_instance(k, 20, seed, area=area, depot=(area / 2, 0.0))
+
+
+def jobs(args: argparse.Namespace) -> Iterator[Job]:
+    """The solves asked for, GTSPLIB first (by size), then UAV by K, seed and omega."""
+    refs = gtsplib.best_known()
+    for name in gtsplib_names(args.gtsplib):
+        yield Job("GTSPLIB", name, gtsplib.read(name), None, refs[name].value)
+    for k in args.uav:
+        for seed in args.seeds:
+            inst = uav_instance(k, seed)
+            for omega in args.omegas:
+                yield Job(f"UAV K={k}", inst.name, inst, omega)
+
+
+def gap_percent(row: Row) -> float:
+    """``(objective - bound) / objective`` in percent (``nan`` without a bound)."""
+    if row.lower_bound is None or row.objective is None:
+        return float("nan")
+    return 100.0 * (row.objective - row.lower_bound) / max(abs(row.objective), 1e-12)
+
+
+def match(row: Row, best: float | None) -> str:
+    """``yes``, ``no`` or ``BETTER``: the objective against the best-known value."""
+    if best is None:
+        return ""
+    return "yes" if row.objective == best else ("BETTER" if row.objective < best else "no")
+
+
+def line(job: Job, row: Row) -> str:
+    """One table line."""
+    proven = "yes" if row.status == "optimal" else row.status
+    omega = "" if job.omega is None else f"{job.omega:g}"
+    best = "" if job.best is None else f"{job.best:.0f}"
+    return (f"{job.name:<16} {job.instance.n_clusters:>4} {job.instance.n_nodes:>5} {omega:>5} "
+            f"{proven:>10} {row.runtime_s:>8.1f} {row.objective:>12.2f} {row.lower_bound:>12.2f} "
+            f"{gap_percent(row):>7.3f} {best:>8} {match(row, job.best):>6}")
+
+
+HEADER = (f"{'instance':<16} {'K':>4} {'n':>5} {'omega':>5} {'proven':>10} {'time s':>8} "
+          f"{'objective':>12} {'bound':>12} {'gap %':>7} {'best':>8} {'match':>6}")
+
+
+def summary(done: Sequence[tuple[Job, Row]]) -> list[str]:
+    """Per group: instances, proven, median time to proof, largest gap left."""
+    out = []
+    for group in dict.fromkeys(j.group for j, _ in done):
+        rows = [r for j, r in done if j.group == group]
+        proven = [r.runtime_s for r in rows if r.status == "optimal"]
+        med = f"{statistics.median(proven):.1f} s" if proven else "-"
+        worst = max(gap_percent(r) for r in rows)
+        out.append(f"{group}: {len(proven)}/{len(rows)} proven, median time to proof {med}, "
+                   f"largest gap {worst:.3f} %")
+    return out
+
+
+def _floats(text: str) -> list[float]:
+    return [float(t) for t in text.split(",") if t.strip()]
+
+
+def _ints(text: str) -> list[int]:
+    return [int(t) for t in text.split(",") if t.strip()]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the benchmark; exit code 1 when a proof disagrees with a proven GTSPLIB optimum."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--solver", default="milp")
+    p.add_argument("--gtsplib", default="small", help="small, large, all, none or NAME,NAME,...")
+    p.add_argument("--uav", type=_ints, default=[], help="K values, e.g. 20,50,100")
+    p.add_argument("--seeds", type=_ints, default=[0, 1, 2])
+    p.add_argument("--omegas", type=_floats, default=[0.0, 0.5, 0.9])
+    p.add_argument("--time-limit", type=float, default=120.0)
+    p.add_argument("--solver-seed", type=int, default=0)
+    p.add_argument("--csv", default=None, help="write the rows here")
+    args = p.parse_args(argv)
+    refs = gtsplib.best_known()
+    print(f"{args.solver}, time limit {args.time_limit:g} s per solve", flush=True)
+    print(HEADER + "\n" + "-" * len(HEADER), flush=True)
+    done: list[tuple[Job, Row]] = []
+    bad = 0
+    start = time.perf_counter()
+    for job in jobs(args):
+        row = solve(job.group, job.instance, job.omega, args.solver, args.time_limit, args.solver_seed)
+        done.append((job, row))
+        print(line(job, row), flush=True)
+        ref = refs.get(job.name) if job.group == "GTSPLIB" else None
+        proven = ref is not None and ref.status == "optimal" and row.status == "optimal"
+        if proven and row.objective != ref.value:
+            print(f"  DISAGREES with the proven optimum {ref.value:g}", flush=True)
+            bad += 1
+    print(*summary(done), sep="\n")
+    print(f"{bad} disagreement(s) with proven optima; {time.perf_counter() - start:.0f} s in all")
+    if args.csv:
+        write_csv(args.csv, COLUMNS, (
+            [j.group, j.name, j.instance.n_clusters, j.instance.n_nodes,
+             "" if j.omega is None else j.omega, r.status, repr(r.objective), repr(r.lower_bound),
+             f"{gap_percent(r):.4f}", f"{r.runtime_s:.2f}", "" if j.best is None else j.best,
+             match(r, j.best)] for j, r in done))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
