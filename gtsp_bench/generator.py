@@ -175,15 +175,18 @@ def instance_set(
     n_nodes: int = DEFAULT_NODES,
     *,
     zeta: float = DEFAULT_ZETA,
+    area: float = DEFAULT_AREA,
     params: EnergyParams | None = None,
 ) -> list[Instance]:
     """A seeded benchmark set: instance i is ``generate_instance(K, N, seed=[seed, K, i])``.
 
     Instance i is the same whatever ``n_instances`` is, so a larger set extends a smaller one.
-    Names are ``uav-K{K}-N{N}-s{seed}-{i:03d}``.
+    Names are ``uav-K{K}-N{N}-s{seed}-{i:03d}``. The base station is at ``(area / 2, 0)`` as in
+    ``gtsp-bench generate``; the default area gives the paper's (500, 0).
     """
     return [
-        generate_instance(n_clusters, n_nodes, [seed, n_clusters, i], zeta=zeta, params=params,
+        generate_instance(n_clusters, n_nodes, [seed, n_clusters, i], zeta=zeta, area=area,
+                          depot=(area / 2, 0.0), params=params,
                           name=f"uav-K{n_clusters}-N{n_nodes}-s{seed}-{i:03d}")
         for i in range(n_instances)
     ]
