@@ -25,9 +25,7 @@ Examples
 from __future__ import annotations
 
 import argparse
-import csv
 import datetime as dt
-import io
 import json
 import math
 import re
@@ -42,8 +40,8 @@ from gtsp_bench.generator import DEFAULT_AREA, DEFAULT_NODES, DEFAULT_ZETA, inst
 from gtsp_bench.io import atomic_write_text, read_instance
 from gtsp_bench.parse import format_json_instance
 from gtsp_bench.registry import get_solver, run_solver
+from gtsp_bench.sets import ReferenceRow, read_reference, write_reference
 
-FIELDS = ("instance", "omega", "value", "lower_bound", "status", "source", "date")
 STATUSES = ("optimal", "best_known")
 #: The omegas of the paper's experiments (gtsp_bench.runner): 0.5 at every K, 0 .. 0.9 at 4 and 7.
 PAPER_OMEGAS = {k: (0.5,) for k in range(5, 11)} | {
@@ -88,28 +86,6 @@ def plan_for(k: int) -> tuple[Step, ...]:
     return PLANS[k]
 
 
-# ---------------------------------------------------------------------- reference.csv
-def format_rows(rows: list[dict[str, str]]) -> str:
-    """CSV text of reference rows, sorted by instance then omega."""
-    out = io.StringIO()
-    w = csv.DictWriter(out, fieldnames=FIELDS, lineterminator="\n")
-    w.writeheader()
-    for row in sorted(rows, key=lambda r: (r["instance"], float(r["omega"]))):
-        w.writerow(row)
-    return out.getvalue()
-
-
-def read_rows(path: Path) -> list[dict[str, str]]:
-    """Rows of an existing reference.csv (none when the file is missing)."""
-    if not path.exists():
-        return []
-    with path.open(encoding="utf-8", newline="") as f:
-        reader = csv.DictReader(f)
-        if tuple(reader.fieldnames or ()) != FIELDS:
-            raise InputError(f"{path}: header is not {','.join(FIELDS)}")
-        return list(reader)
-
-
 # ---------------------------------------------------------------------- solving
 @dataclass(frozen=True)
 class Answer:
@@ -134,7 +110,7 @@ def solve_once(instance, omega: float, step: Step) -> Answer:
     return Answer(step, ev.objective, None if lb is None else float(lb), d["status"] == "optimal")
 
 
-def reference_row(instance, omega: float, steps: tuple[Step, ...], date: str) -> dict[str, str]:
+def reference_row(instance, omega: float, steps: tuple[Step, ...], date: str) -> ReferenceRow:
     """The reference row of one (instance, omega): the best value of the plan's runs."""
     answers = [solve_once(instance, omega, s) for s in steps]
     best = min(answers, key=lambda a: (a.value, not a.proven))
@@ -144,10 +120,8 @@ def reference_row(instance, omega: float, steps: tuple[Step, ...], date: str) ->
                                f"{best.value!r} below {a.step.source}'s proven optimum {a.value!r}")
     bounds = [a.lower_bound for a in answers if a.lower_bound is not None and math.isfinite(a.lower_bound)]
     lb = min(max(bounds), best.value) if bounds else None  # a bound above the value is float noise
-    return {"instance": instance.name, "omega": repr(float(omega)), "value": repr(best.value),
-            "lower_bound": "" if lb is None else repr(lb),
-            "status": "optimal" if best.proven else "best_known", "source": best.step.source,
-            "date": date}
+    return ReferenceRow(instance.name, float(omega), best.value, lb,
+                        "optimal" if best.proven else "best_known", best.step.source, date)
 
 
 _SET = re.compile(r"uav-K(\d+)-N(\d+)-s(\d+)$")
@@ -162,8 +136,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     steps = plan_for(k)
     omegas = tuple(args.omega) if args.omega else PAPER_OMEGAS.get(k, LARGE_OMEGAS)
     out = folder / "reference.csv"
-    rows = read_rows(out)
-    done = {(r["instance"], float(r["omega"])) for r in rows}
+    rows = read_reference(out) if out.exists() else {}
+    done = set(rows)
     files = sorted(folder.glob(f"{folder.name}-*.json"))
     last = len(files) - 1 if args.last is None else args.last
     todo = [(p, w) for p in files if args.first <= int(p.stem.rsplit("-", 1)[1]) <= last
@@ -175,10 +149,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
     for path, omega in todo:
         t = time.perf_counter()
         row = reference_row(read_instance(path), omega, steps, date)
-        rows.append(row)
-        atomic_write_text(out, format_rows(rows))
-        print(f"{row['instance']} w={row['omega']}: {row['value']} {row['status']} ({row['source']}; "
-              f"lb {row['lower_bound'] or '-'}) {time.perf_counter() - t:.1f}s", flush=True)
+        rows[(row.instance, row.omega)] = row
+        write_reference(out, sorted(rows.values(), key=lambda r: (r.instance, r.omega)))  # atomic
+        lb = "-" if row.lower_bound is None else repr(row.lower_bound)
+        print(f"{row.instance} w={row.omega!r}: {row.value!r} {row.status} ({row.source}; lb {lb}) "
+              f"{time.perf_counter() - t:.1f}s", flush=True)
     print(f"{folder.name}: done in {time.perf_counter() - start:.0f}s", flush=True)
     return 0
 
