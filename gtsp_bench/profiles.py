@@ -104,11 +104,15 @@ def plot_profile(profile: pd.DataFrame, ax: Any = None) -> Any:
 
 
 def plot_gap_k(table: pd.DataFrame, ax: Any = None) -> Any:
-    """Mean gap in percent against K, one line per solver (and set, when several)."""
+    """Mean gap in percent against K, one line per solver across the sets (the UAV sets of
+    K = 20, 50, ... make one line each); one line per set and solver when two sets share a K."""
     ax = _axes(ax)
-    several = table["set"].nunique() > 1
-    for i, ((set_name, s), g) in enumerate(table.groupby(["set", "solver"], sort=False)):
-        label = f"{s} ({set_name})" if several else str(s)
+    shared_k = len(table) > 0 and int(table.groupby("K")["set"].nunique().max()) > 1
+    keys = ["set", "solver"] if shared_k else ["solver"]
+    for i, (key, g) in enumerate(table.groupby(keys, sort=False)):
+        s = key[-1] if isinstance(key, tuple) else key
+        label = f"{s} ({key[0]})" if shared_k else str(s)
+        g = g.sort_values("K")
         ax.plot(g["K"], g["mean_gap_pct"], marker=_MARKERS[i % len(_MARKERS)], label=label,
                 color=solver_color(str(s)), linewidth=1.2, markersize=4)
     if len(table) and table["K"].max() > 10 * max(table["K"].min(), 1):
