@@ -40,7 +40,6 @@ and PNG are written atomically and the generated blocks of ``<out>/README.md`` a
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import math
 import os
@@ -57,7 +56,6 @@ import pandas as pd
 from gtsp_bench.checks import parse_ks
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
-from gtsp_bench.instance import Instance
 from gtsp_bench.io import atomic_write_text, read_instance
 from gtsp_bench.parse import format_json_instance
 from gtsp_bench.pool import PhaseStats
@@ -67,6 +65,13 @@ from gtsp_bench.report import (
     write_report,
 )
 from gtsp_bench.tasklog import TaskLog, exclusive_lock, has_answer, needs_run
+from gtsp_bench.tasks import (
+    RunFolder,
+    StoredInstance,
+    Task,
+    run_solver_tasks,
+    task_key,
+)
 
 EXPERIMENTS = ("ratio-omega", "ratio-k", "runtime", "trajectories", "training")
 #: The paper's cluster counts for the omega sweeps and the trajectory figures.
@@ -85,10 +90,6 @@ DEFAULT_TIME_LIMIT = 10.0
 SOLVER_SEED = 0
 #: The default reference is ``dp`` up to this K, then ``milp``; ``brute`` when neither exists.
 DP_MAX_K = 12
-#: A worker gets ``HARD_LIMIT_FACTOR * time_limit + HARD_LIMIT_GRACE_S`` seconds per solve before
-#: it is killed (solvers are expected to stop themselves at ``time_limit``).
-HARD_LIMIT_FACTOR = 2.0
-HARD_LIMIT_GRACE_S = 10.0
 #: Bad task-log records named one by one before the rest are counted.
 MAX_SKIP_WARNINGS = 5
 #: Columns of every solve experiment's CSV, in order.
@@ -113,7 +114,7 @@ def _split_names(text: str | Sequence[str], what: str, valid: Sequence[str]) -> 
 
 
 @dataclass(frozen=True)
-class BenchConfig:
+class BenchConfig(RunFolder):
     """A validated benchmark run; build it with :func:`make_config`."""
 
     experiments: tuple[str, ...]
@@ -141,19 +142,6 @@ class BenchConfig:
         ks = tuple(k for k in PAPER_OMEGA_KS if k in self.ks)
         return ks or tuple(sorted({min(self.ks), max(self.ks)}))
 
-    @property
-    def log_path(self) -> Path:
-        """The task log that makes runs resumable."""
-        return self.out_dir / "tmp" / "runs.jsonl"
-
-    @property
-    def lock_path(self) -> Path:
-        """The lock a run holds on its output folder."""
-        return self.out_dir / "tmp" / "bench.lock"
-
-    def hard_limit(self) -> float:
-        """Seconds after which a worker's solve is killed."""
-        return HARD_LIMIT_FACTOR * self.time_limit + HARD_LIMIT_GRACE_S
 
 
 def resolve_references(reference: str | None, ks: Iterable[int], registered: Sequence[str]) -> dict[int, str]:
@@ -265,16 +253,6 @@ def make_config(
 
 
 # ---------------------------------------------------------------------- instances
-@dataclass(frozen=True)
-class StoredInstance:
-    """An instance with its file text and content hash."""
-
-    instance: Instance
-    text: str
-    fingerprint: str
-    path: Path
-
-
 def load_instance_set(config: BenchConfig, k: int, n: int) -> list[StoredInstance]:
     """The first ``n`` instances of the seeded set for K = ``k``, written once and re-used.
 
@@ -346,42 +324,6 @@ def paper_options(solver: str) -> tuple[tuple[str, Any], ...]:
     return tuple(sorted(PAPER_SOLVER_OPTIONS.get(solver, {}).items()))
 
 
-@dataclass(frozen=True)
-class Task:
-    """One solve; ``key`` identifies it in the task log; ``options`` are the solver's keyword
-    options (none: its defaults)."""
-
-    key: str
-    solver: str
-    omega: float
-    instance: StoredInstance
-    seed: int
-    time_limit: float
-    options: tuple[tuple[str, Any], ...] = ()
-
-
-@functools.cache
-def _revision(solver: str) -> str:
-    from gtsp_bench.registry import solver_revision
-
-    try:
-        return solver_revision(solver)
-    except Exception:  # a solver that cannot be loaded fails in its worker, with the reason
-        return ""
-
-
-def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float,
-             options: Sequence[tuple[str, Any]] = ()) -> str:
-    """The log key: the instance's name and content hash, the solver, its revision if it has one
-    (a learned policy's weights, see :func:`gtsp_bench.registry.solver_revision`), its options if
-    any, and the solve settings. A changed revision gives new keys, so those solves are run again."""
-    revision = _revision(solver)
-    name = f"{solver}@{revision}" if revision else solver
-    if options:
-        name += "[" + ",".join(f"{k}={v!r}" for k, v in options) + "]"
-    return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={time_limit:g}"
-
-
 def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str, Task]]:
     """Load the instance sets the selected experiments need and list their tasks (deduplicated)."""
     cells = [c for e in config.experiments for c in experiment_cells(config, e)]
@@ -397,36 +339,6 @@ def plan(config: BenchConfig) -> tuple[dict[int, list[StoredInstance]], dict[str
             key = task_key(inst, s, c.omega, SOLVER_SEED, config.time_limit, options)
             tasks.setdefault(key, Task(key, s, c.omega, inst, SOLVER_SEED, config.time_limit, options))
     return sets, tasks
-
-
-# ---------------------------------------------------------------------- execution
-def _task_message(t: Task) -> dict[str, Any]:
-    msg = {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
-           "seed": t.seed, "time_limit": t.time_limit}
-    if t.options:
-        msg["options"] = dict(t.options)
-    return msg
-
-
-def run_solver_tasks(
-    solver: str, tasks: Sequence[Task], jobs: int, hard_limit: float,
-    on_record: Callable[[Task, dict[str, Any], bool], None], *, executor: str = "local",
-) -> PhaseStats:
-    """Run one solver's tasks in the pool's worker processes, with its hard limit
-    (:func:`gtsp_bench.pool.run_jobs`): ``jobs`` of them on this machine (``executor`` ``local``),
-    or on Dask workers (``dask``: ``jobs`` local Dask workers; ``tcp://HOST:PORT``: a scheduler's
-    workers; see :mod:`gtsp_bench.executors`). ``on_record`` gets each result as it arrives. A
-    Dask executor stays open for the next call (one cluster for all phases of a run) until
-    :func:`gtsp_bench.executors.close_executors`, which :func:`run_bench` calls at its end."""
-    from gtsp_bench.executors import open_executor
-    from gtsp_bench.registry import solver_specs
-
-    spec = next(s for s in solver_specs() if s.name == solver)
-    target = spec.import_path()  # a solver registered by class is re-registered in the workers
-    by_key = {t.key: t for t in tasks}
-    return open_executor(executor, jobs).run(
-        solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks], hard_limit,
-        lambda key, rec, persist: on_record(by_key[key], rec, persist))
 
 
 # ---------------------------------------------------------------------- rows and tables

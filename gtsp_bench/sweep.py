@@ -2,8 +2,8 @@
 
 A sweep plans one task per set instance x solver x omega x solver seed (omega is ignored for a
 distance-only instance: GTSPLIB) and runs them through the paper runner's harness
-(:func:`gtsp_bench.runner.run_solver_tasks`: fresh worker processes per solver, a hard kill past
-the limit). Tasks are keyed by :func:`gtsp_bench.runner.task_key` and logged in
+(:func:`gtsp_bench.tasks.run_solver_tasks`: fresh worker processes per solver, a hard kill past
+the limit). Tasks are keyed by :func:`gtsp_bench.tasks.task_key` and logged in
 ``<out>/tmp/runs.jsonl`` (:class:`gtsp_bench.tasklog.TaskLog`), so a second invocation re-uses
 every finished solve and an interrupted one resumes.
 
@@ -37,15 +37,7 @@ import pandas as pd
 from gtsp_bench.errors import InputError
 from gtsp_bench.io import atomic_write_text
 from gtsp_bench.pool import PhaseStats
-from gtsp_bench.runner import (
-    HARD_LIMIT_FACTOR,
-    HARD_LIMIT_GRACE_S,
-    MAX_SKIP_WARNINGS,
-    StoredInstance,
-    Task,
-    run_solver_tasks,
-    task_key,
-)
+from gtsp_bench.runner import MAX_SKIP_WARNINGS
 from gtsp_bench.sets import (
     Improvement,
     InstanceSet,
@@ -56,6 +48,13 @@ from gtsp_bench.sets import (
     update_reference,
 )
 from gtsp_bench.tasklog import TaskLog, exclusive_lock, needs_run
+from gtsp_bench.tasks import (
+    RunFolder,
+    StoredInstance,
+    Task,
+    run_solver_tasks,
+    task_key,
+)
 
 DEFAULT_OUT = Path("benchmarks") / "out" / "sets"
 DEFAULT_OMEGAS = (0.5,)
@@ -79,7 +78,7 @@ TIDY_COLUMNS = (
 
 # ---------------------------------------------------------------------- configuration
 @dataclass(frozen=True)
-class SweepConfig:
+class SweepConfig(RunFolder):
     """A validated sweep; build it with :func:`make_sweep_config`."""
 
     sets: tuple[str, ...]
@@ -99,20 +98,6 @@ class SweepConfig:
     progress: bool = True
     update_reference: bool = False
     executor: str = "local"
-
-    @property
-    def log_path(self) -> Path:
-        """The task log that makes sweeps resumable."""
-        return self.out_dir / "tmp" / "runs.jsonl"
-
-    @property
-    def lock_path(self) -> Path:
-        """The lock a sweep holds on its output folder (the paper runner's, same place)."""
-        return self.out_dir / "tmp" / "bench.lock"
-
-    def hard_limit(self) -> float:
-        """Seconds after which a worker's solve is killed (as the paper's runner)."""
-        return HARD_LIMIT_FACTOR * self.time_limit + HARD_LIMIT_GRACE_S
 
 
 def parse_seeds(text: str | Sequence[int]) -> tuple[int, ...]:

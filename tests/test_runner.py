@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gtsp_bench import runner
+from gtsp_bench import runner, tasks
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
 from gtsp_bench.runner import CSV_COLUMNS, make_config, resolve_references, run_bench
@@ -174,11 +174,11 @@ def test_new_solver_revision_is_solved_again(tmp_path, monkeypatch):
     assert first.run == first.tasks
     assert run_bench(config, log=lambda m: None).run == 0
     monkeypatch.setattr(runner_solvers.Revised, "REV", "b")
-    runner._revision.cache_clear()
+    tasks._revision.cache_clear()
     try:
         again = run_bench(config, log=lambda m: None)
     finally:
-        runner._revision.cache_clear()
+        tasks._revision.cache_clear()
     revised = [json.loads(line) for line in _log_lines(config) if "|t-revised@b|" in line]
     assert again.run == len(revised) > 0 and again.cached == again.tasks - again.run
     assert sum("|t-revised@a|" in line for line in _log_lines(config)) == len(revised)
@@ -221,7 +221,7 @@ def test_failing_and_hanging_solvers_become_rows(tmp_path, monkeypatch):
     """A solver that raises gives 'failed' rows, one that hangs is killed ('time_limit' without an
     answer), one that cannot be built gives 'failed' rows that are not logged; the other solvers'
     rows are fine. Every row without an answer counts as failed."""
-    monkeypatch.setattr(runner, "HARD_LIMIT_GRACE_S", 0.5)
+    monkeypatch.setattr(tasks, "HARD_LIMIT_GRACE_S", 0.5)
     config = _config(tmp_path, experiments="ratio-k", ks="3", n_instances=2,
                      solvers="greedy,t-crash,t-hang,t-missing", time_limit=0.2, jobs=2)
     summary = run_bench(config, log=lambda m: None)
@@ -464,7 +464,7 @@ def test_fuzz_the_log_reader_keeps_only_records_a_table_can_use(tmp_path_factory
     assert len(records) + len(log.skipped) <= len(lines)
     assert all(line.startswith(f"{path}:") for line in log.skipped)
     inst = generate_instance(2, 3, seed=0)
-    stored = runner.StoredInstance(inst, format_json_instance(inst), "0123", path)
+    stored = tasks.StoredInstance(inst, format_json_instance(inst), "0123", path)
     cell = runner.Cell(2, 0, 0.5)
     for rec in records.values():
         row = runner._row("ratio-k", cell, stored, "greedy", "dp", rec, rec, 10.0)
