@@ -71,6 +71,7 @@ from gtsp_bench.tasks import (
     Task,
     run_solver_tasks,
     task_key,
+    where_solves_run,
 )
 
 EXPERIMENTS = ("ratio-omega", "ratio-k", "runtime", "trajectories", "training")
@@ -453,9 +454,7 @@ def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
             f"records skipped")
     todo = [t for t in tasks.values() if config.fresh or needs_run(records.get(t.key), config.retry_failed)]
     summary.tasks, summary.cached = len(tasks), len(tasks) - len(todo)
-    where = f"{config.jobs} worker(s)" if config.executor == "local" else (
-        f"{config.jobs} local Dask worker(s)" if config.executor == "dask"
-        else f"the Dask scheduler {config.executor}")
+    where = where_solves_run(config.executor, config.jobs)
     say(f"{len(tasks)} solves, {summary.cached} already in {config.log_path}, {len(todo)} to run "
         f"with {where}, time limit {config.time_limit:g} s")
     transient: dict[str, dict[str, Any]] = {}

@@ -54,6 +54,7 @@ from gtsp_bench.tasks import (
     Task,
     run_solver_tasks,
     task_key,
+    where_solves_run,
 )
 
 DEFAULT_OUT = Path("benchmarks") / "out" / "sets"
@@ -420,8 +421,8 @@ def _run_sweep(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[Ent
     todo = [t for t in tasks.values() if config.fresh or needs_run(records.get(t.key), config.retry_failed)]
     summary.cached = len(tasks) - len(todo)
     say(f"{', '.join(f'{s.name} ({len(e)} instances)' for s, e in loaded)}: {len(tasks)} solves, "
-        f"{summary.cached} already in {config.log_path}, {len(todo)} to run with {config.jobs} "
-        f"worker(s), time limit {config.time_limit:g} s")
+        f"{summary.cached} already in {config.log_path}, {len(todo)} to run with "
+        f"{where_solves_run(config.executor, config.jobs)}, time limit {config.time_limit:g} s")
     if todo:
         from tqdm import tqdm
 

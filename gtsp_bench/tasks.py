@@ -94,6 +94,13 @@ def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_li
     return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={time_limit:g}"
 
 
+def where_solves_run(executor: str, jobs: int) -> str:
+    """How a run's log line names where its solves run, e.g. ``2 local Dask worker(s)``."""
+    if executor == "local":
+        return f"{jobs} worker(s)"
+    return f"{jobs} local Dask worker(s)" if executor == "dask" else f"the Dask scheduler {executor}"
+
+
 def _task_message(t: Task) -> dict[str, Any]:
     msg = {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
            "seed": t.seed, "time_limit": t.time_limit}

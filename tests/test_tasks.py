@@ -41,3 +41,11 @@ def test_run_folder_paths_and_hard_limit():
     c = Config(Path("out"), 5.0)
     assert c.log_path == Path("out/tmp/runs.jsonl") and c.lock_path == Path("out/tmp/bench.lock")
     assert c.hard_limit() == 2 * 5.0 + 10.0
+
+
+def test_where_solves_run_names_the_executor():
+    from gtsp_bench.tasks import where_solves_run
+
+    assert where_solves_run("local", 2) == "2 worker(s)"
+    assert where_solves_run("dask", 3) == "3 local Dask worker(s)"
+    assert where_solves_run("tcp://h:8786", 2) == "the Dask scheduler tcp://h:8786"
