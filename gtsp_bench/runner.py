@@ -69,7 +69,7 @@ from gtsp_bench.tasks import (
     RunFolder,
     StoredInstance,
     Task,
-    run_solver_tasks,
+    phase_lines,
     task_key,
     where_solves_run,
 )
@@ -476,19 +476,12 @@ def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
 
         order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
         try:
-            for solver in order:
-                mine = [t for t in todo if t.solver == solver]
-                if mine:
-                    bar.set_description(solver)
-                    summary.phases.append(run_solver_tasks(
-                        solver, mine, config.jobs, config.hard_limit(), on_record,
-                        executor=config.executor))
+            summary.phases += config.run_phases(order, todo, on_record, bar.set_description)
         finally:
             bar.close()
             task_log.close()
-        for p in summary.phases:
-            say(f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
-                f"{p.wall_s:.1f} s on {p.workers} worker(s)")
+        for line in phase_lines(summary.phases):
+            say(line)
     for solver in sorted({r["solver"] for r in transient.values()}):
         note = next(r["note"] for r in transient.values() if r["solver"] == solver)
         say(f"warning: {solver}: {note} (not recorded: a rerun retries it)")

@@ -52,7 +52,7 @@ from gtsp_bench.tasks import (
     RunFolder,
     StoredInstance,
     Task,
-    run_solver_tasks,
+    phase_lines,
     task_key,
     where_solves_run,
 )
@@ -442,19 +442,12 @@ def _run_sweep(config: SweepConfig, loaded: Sequence[tuple[InstanceSet, list[Ent
             bar.update()
 
         try:
-            for solver in config.solvers:
-                mine = [t for t in todo if t.solver == solver]
-                if mine:
-                    bar.set_description(solver)
-                    summary.phases.append(run_solver_tasks(
-                        solver, mine, config.jobs, config.hard_limit(), on_record,
-                        executor=config.executor))
+            summary.phases += config.run_phases(config.solvers, todo, on_record, bar.set_description)
         finally:
             bar.close()
             task_log.close()
-        for p in summary.phases:
-            say(f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
-                f"{p.wall_s:.1f} s on {p.workers} worker(s)")
+        for line in phase_lines(summary.phases):
+            say(line)
     df = sweep_rows(config, loaded, cells, records)
     refused = df["status"] == "refused"
     summary.refused = int(refused.sum())

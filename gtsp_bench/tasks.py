@@ -26,12 +26,15 @@ HARD_LIMIT_GRACE_S = 10.0
 
 class RunFolder:
     """What a run (the paper's experiments or a sweep) keeps in its output folder ``out_dir``:
-    the task log and the lock; and the hard limit of its solves (from ``time_limit``). A base of
-    the frozen config dataclasses, which hold those two fields (declared here for readers and
-    type checkers only: a plain class's annotations make no dataclass fields)."""
+    the task log and the lock; the hard limit of its solves (from ``time_limit``); and how it
+    runs them (:meth:`run_phases`). A base of the frozen config dataclasses, which hold the fields
+    below (declared here for readers and type checkers only: a plain class's annotations make no
+    dataclass fields)."""
 
     out_dir: Path
     time_limit: float
+    jobs: int
+    executor: str
 
     @property
     def log_path(self) -> Path:
@@ -46,6 +49,27 @@ class RunFolder:
     def hard_limit(self) -> float:
         """Seconds after which a worker's solve is killed."""
         return HARD_LIMIT_FACTOR * self.time_limit + HARD_LIMIT_GRACE_S
+
+    def run_phases(self, solvers: Sequence[str], todo: Sequence[Task],
+                   on_record: Callable[[Task, dict[str, Any], bool], None],
+                   describe: Callable[[str], Any]) -> list[PhaseStats]:
+        """Run ``todo`` one solver after another, in the order of ``solvers``
+        (:func:`run_solver_tasks` with this run's jobs, hard limit and executor); ``describe``
+        gets each solver's name as its phase starts (a progress bar's label)."""
+        phases = []
+        for solver in solvers:
+            mine = [t for t in todo if t.solver == solver]
+            if mine:
+                describe(solver)
+                phases.append(run_solver_tasks(solver, mine, self.jobs, self.hard_limit(), on_record,
+                                               executor=self.executor))
+        return phases
+
+
+def phase_lines(phases: Sequence[PhaseStats]) -> list[str]:
+    """One log line per phase: solves, the solver's own time and the wall time."""
+    return [f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
+            f"{p.wall_s:.1f} s on {p.workers} worker(s)" for p in phases]
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gtsp_bench import sweep
+from gtsp_bench import tasks
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
@@ -112,7 +112,7 @@ def test_sweep_outputs_reuse_and_references(tmp_path, monkeypatch, capsys):
     def no_solves(*a, **k):
         raise AssertionError("a re-used sweep must not call the solvers")
 
-    monkeypatch.setattr(sweep, "run_solver_tasks", no_solves)
+    monkeypatch.setattr(tasks, "run_solver_tasks", no_solves)
     capsys.readouterr()
     code = main(["bench", "--set", str(folder), "--solvers", "greedy,dp", "--time-limit", "1",
                  "--jobs", "1", "--out", str(out), "--no-progress"])
