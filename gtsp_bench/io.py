@@ -50,6 +50,14 @@ def _instance_suffix(p: Path) -> str:
     return suffix
 
 
+def instance_stem(path: str | os.PathLike[str]) -> str:
+    """A file's name without its format suffixes: ``11berlin52`` for ``11berlin52.gtsp.gz``."""
+    name = Path(path).name
+    if name.lower().endswith(GZIP_SUFFIX):
+        name = name[: -len(GZIP_SUFFIX)]
+    return Path(name).stem
+
+
 def _read_text(path: Path) -> str:
     """The UTF-8 text of a file, gunzipped if its name ends in ``.gz``."""
     try:
@@ -98,8 +106,7 @@ def read_instance(path: str | os.PathLike[str]) -> Instance:
     try:
         if suffix == ".gtsp":
             return parse_gtsp(text)
-        stem = Path(p.stem).stem if p.suffix.lower() == GZIP_SUFFIX else p.stem
-        return parse_json_instance(text, default_name=stem)
+        return parse_json_instance(text, default_name=instance_stem(p))
     except InputError as e:
         raise InputError(f"{p}: {e}") from None
 

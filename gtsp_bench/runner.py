@@ -40,7 +40,6 @@ and PNG are written atomically and the generated blocks of ``<out>/README.md`` a
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import sys
@@ -69,6 +68,7 @@ from gtsp_bench.tasks import (
     RunFolder,
     StoredInstance,
     Task,
+    fingerprint,
     phase_lines,
     task_key,
     where_solves_run,
@@ -281,8 +281,7 @@ def load_instance_set(config: BenchConfig, k: int, n: int) -> list[StoredInstanc
         else:
             atomic_write_text(path, fresh_text)
             inst, text = fresh, fresh_text
-        digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-        out.append(StoredInstance(inst, text, digest, path))
+        out.append(StoredInstance(inst, text, fingerprint(text), path))
     return out
 
 

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
-import hashlib
 import io
 import math
 import os
@@ -38,8 +37,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gtsp_bench.errors import InputError
-from gtsp_bench.io import GZIP_SUFFIX, INSTANCE_SUFFIXES, atomic_write_text, format_suffix, read_text
+from gtsp_bench.io import INSTANCE_SUFFIXES, atomic_write_text, format_suffix, instance_stem, read_text
 from gtsp_bench.parse import parse_instance_text
+from gtsp_bench.tasks import fingerprint
 
 #: File name of a set's reference values.
 REFERENCE_FILE = "reference.csv"
@@ -217,15 +217,6 @@ class InstanceSet:
     reference_path: Path | None
 
 
-def instance_stem(path: str | os.PathLike[str]) -> str:
-    """A file's name without its format suffixes: ``11berlin52`` for ``11berlin52.gtsp.gz``."""
-    p = Path(path)
-    name = p.name
-    if name.lower().endswith(GZIP_SUFFIX):
-        name = name[: -len(GZIP_SUFFIX)]
-    return Path(name).stem
-
-
 def _is_instance_file(p: Path) -> bool:
     return p.is_file() and not p.name.startswith(".") and format_suffix(p) in INSTANCE_SUFFIXES
 
@@ -311,7 +302,7 @@ def read_set_file(f: SetFile) -> tuple[object, str, str]:
         inst = parse_instance_text(text, default_name=f.stem)
     except InputError as e:
         raise InputError(f"{f.path}: {e}") from None
-    return inst, text, hashlib.sha256(text.encode()).hexdigest()[:16]
+    return inst, text, fingerprint(text)
 
 
 # ---------------------------------------------------------------------- improvements

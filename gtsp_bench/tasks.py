@@ -10,6 +10,7 @@ runs one solver's tasks in fresh worker processes with a hard time limit
 from __future__ import annotations
 
 import functools
+import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -70,6 +71,11 @@ def phase_lines(phases: Sequence[PhaseStats]) -> list[str]:
     """One log line per phase: solves, the solver's own time and the wall time."""
     return [f"  {p.solver}: {p.solves} solves, solver time {p.solver_s:.1f} s, wall "
             f"{p.wall_s:.1f} s on {p.workers} worker(s)" for p in phases]
+
+
+def fingerprint(text: str) -> str:
+    """An instance file's content hash in task keys: the first 16 hex digits of its SHA-256."""
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
