@@ -41,7 +41,15 @@ from collections.abc import Callable, Hashable, Mapping, Sequence
 from typing import Any, Protocol
 
 from gtsp_bench.errors import InputError
-from gtsp_bench.pool import INFRASTRUCTURE, MAX_ATTEMPTS, PhaseStats, WorkerPool, failure, run_jobs
+from gtsp_bench.pool import (
+    INFRASTRUCTURE,
+    MAX_ATTEMPTS,
+    PhaseStats,
+    WorkerPool,
+    failure,
+    one_line,
+    run_jobs,
+)
 
 #: The executor used when none is named.
 DEFAULT_EXECUTOR = "local"
@@ -230,8 +238,7 @@ def _lost(e: BaseException) -> dict[str, Any]:
     """The failure record of a Dask task that gave no result."""
     if _is_lost_worker(e):
         return failure(f"Dask worker lost under this solve in {MAX_ATTEMPTS} attempts", cause=INFRASTRUCTURE)
-    text = (f"{type(e).__name__}: {e}".splitlines() or [""])[0][:300]
-    return failure(f"not run on the Dask cluster: {text}", cause=INFRASTRUCTURE)
+    return failure(f"not run on the Dask cluster: {one_line(e)}", cause=INFRASTRUCTURE)
 
 
 _OPEN: dict[tuple[str, int], Executor] = {}

@@ -60,7 +60,8 @@ def failure(note: str, status: str = "failed", cause: str = "solver") -> dict[st
     return out
 
 
-def _one_line(e: BaseException) -> str:
+def one_line(e: BaseException) -> str:
+    """``"Type: message"`` of an exception, its first line, at most 300 characters."""
     text = f"{type(e).__name__}: {e}"
     return (text.splitlines() or [text])[0][:300]
 
@@ -104,11 +105,11 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
         res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
                          seed=msg["seed"], name=name)
     except InputError as e:  # the solver declines this input by design
-        out = failure(_one_line(e), "refused")
+        out = failure(one_line(e), "refused")
     except MemoryError as e:
-        out = failure(f"out of memory: {_one_line(e)}", cause=INFRASTRUCTURE)
+        out = failure(f"out of memory: {one_line(e)}", cause=INFRASTRUCTURE)
     except Exception as e:  # any solver error becomes a row; the run goes on
-        out = failure(_one_line(e))
+        out = failure(one_line(e))
     else:
         e = res.energy
         out = {
@@ -147,7 +148,7 @@ def worker_main(fd: int) -> None:
     except (EOFError, OSError):
         return
     except Exception as e:
-        conn.send(("init_failed", _one_line(e)))
+        conn.send(("init_failed", one_line(e)))
         return
     cache: dict[str, Any] = {}
     while True:
