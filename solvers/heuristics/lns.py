@@ -230,7 +230,6 @@ class Lns:
         ``time_limit`` only when the limit came before the search converged.
         """
         time_limit = time_limit_or_default(time_limit, instance.n_clusters)
-        kernels.warm_up()
         deadline = deadline_after(time_limit)
         problem = price(instance, omega)
         search = _Search(problem, self.settings, np.random.default_rng(seed))
