@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from gtsp_bench import __version__
-from gtsp_bench.errors import InputError, SolverError
+from gtsp_bench.errors import InputError, OneLineParser, SolverError
 
 if TYPE_CHECKING:
     from gtsp_bench.solvers.learned.recipes import TrainConfig
@@ -81,13 +81,6 @@ examples:
 """
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with the project's one-line error format."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
 def _float(text: str) -> float:
     try:
         return float(text)
@@ -128,7 +121,7 @@ def _key_value(text: str) -> tuple[str, Any]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``gtsp-bench``."""
-    parser = _Parser(
+    parser = OneLineParser(
         prog="gtsp-bench",
         description=(
             "Benchmark suite and solvers for UAV data collection from IoT clusters as a "
@@ -139,7 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
 
     p = sub.add_parser("generate", help="write a seeded random UAV instance (paper section VI)",

@@ -1,4 +1,4 @@
-"""The table of heuristics and peers: GTSPLIB by size and generated UAV instances of large K.
+"""The table of heuristics and peers: GTSPLIB by size and the committed UAV sets of large K.
 
 ``make bench-heuristics-table`` (``python -m gtsp_bench.heuristics_table``) runs every heuristic
 and peer (:data:`SOLVERS`) with one time budget per solve on
@@ -6,10 +6,10 @@ and peer (:data:`SOLVERS`) with one time budget per solve on
 * GTSPLIB, grouped by size (:data:`GTSPLIB_GROUPS`, the smallest ``--per-group`` instances of each
   group, in the order of ``best_known.csv``), against the best-known value; the asymmetric (AGTSP)
   files are a group of their own, refused by the solvers that handle symmetric costs only;
-* generated UAV instances of K = 20, 50, 100, 200 clusters of 20 nodes at one omega, against the
-  best tour any solver found for the instance (no exact optimum is in reach at these sizes). The
-  square area grows with K (:func:`uav_area`) so that the clusters cover at most a quarter of it
-  (the generator places at most :data:`~gtsp_bench.generator.MAX_COVER` of an area).
+* the committed UAV sets ``instances/uav-K{K}-N20-s1`` of K = 20, 50, 100, 200 clusters of 20
+  nodes (their first ``--uav-instances`` files) at one omega, against the set's ``reference.csv``
+  value (a proven optimum or the best known) or, for an instance without one or one that a solver
+  beat, the best tour any solver found for it.
 
 It writes one CSV row per solve (``--csv``, default ``benchmarks/heuristics-table.csv``, committed
 with the page) and the Markdown table, with the command that made it, into the generated block
@@ -33,11 +33,12 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 from gtsp_bench.checks import check_float, check_int, check_omega, check_seed, parse_ks
-from gtsp_bench.errors import InputError
-from gtsp_bench.generator import DEFAULT_AREA, DEFAULT_ZETA, generate_instance
+from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.instance import Instance
+from gtsp_bench.sets import REL_TOL, InstanceSet, read_set_file, resolve_set
 from gtsp_bench.tables import Row, solve, write_csv
 
 #: The heuristics and peers of the table, in its column order.
@@ -51,10 +52,10 @@ GTSPLIB_GROUPS = (
 )
 #: The group of the asymmetric GTSPLIB files.
 AGTSP_GROUP = "GTSPLIB AGTSP"
-#: Cluster counts of the generated UAV instances (20 nodes each).
+#: Cluster counts of the committed UAV sets of the table (20 nodes each).
 UAV_KS = (20, 50, 100, 200)
-#: Largest share of the area the generated clusters cover.
-UAV_COVER = 0.25
+#: The committed UAV set of K clusters.
+UAV_SET = "uav-K{k}-N20-s1"
 #: The page and the name of the generated block the table goes to.
 DOCS_PAGE = Path("docs") / "solvers" / "heuristics.md"
 BLOCK = "heuristics-table"
@@ -75,28 +76,34 @@ class TableConfig:
     uav_ks: tuple[int, ...] = UAV_KS
     uav_instances: int = 3
     omega: float = 0.5
-    set_seed: int = 0
     solver_seed: int = 0
     gtsplib: bool = True
     agtsp: bool = True
     max_nodes: int = 15_000
     csv: Path = DEFAULT_CSV
     docs: Path | None = DOCS_PAGE
+    instance_dir: Path = Path("instances")
 
 
-def uav_area(k: int, zeta: float = DEFAULT_ZETA) -> float:
-    """Side of the square area (m) for K clusters: the default 1,000 m, or more, in whole 100 m,
-    so that the clusters' squares cover at most :data:`UAV_COVER` of it."""
-    need = math.sqrt(k * (2 * zeta) ** 2 / UAV_COVER)
-    return max(DEFAULT_AREA, 100.0 * math.ceil(need / 100.0))
+def uav_set(k: int, instance_dir: Path = Path("instances")) -> InstanceSet:
+    """The committed UAV set of K clusters (:data:`UAV_SET`).
+
+    Raises
+    ------
+    InputError
+        When there is none for this K (the message lists the committed sets).
+    """
+    return resolve_set(UAV_SET.format(k=k), instance_dir)
 
 
-def uav_instances(k: int, n: int, seed: int) -> list[Instance]:
-    """``n`` seeded UAV instances of K clusters of 20 nodes (instance i: seed ``[seed, K, i]``), the
-    depot at the middle of the area's lower edge, as the default one."""
-    area = uav_area(k)
-    return [generate_instance(k, 20, [seed, k, i], area=area, depot=(area / 2, 0.0),
-                              name=f"uav-K{k}-N20-a{area:g}-s{seed}-{i:03d}") for i in range(n)]
+def reference_for(found: Sequence[Row], row_value: float | None, row_status: str | None) -> tuple[float, str]:
+    """The value the solves of one UAV instance are measured against, and its kind: the set's
+    reference (``optimum`` or ``best known``) unless a solve beat it or there is none; then the
+    best tour found (``best found``)."""
+    best = min((r.objective for r in found if r.status not in _NO_ANSWER), default=math.nan)
+    if row_value is not None and not best < row_value * (1.0 - REL_TOL):
+        return row_value, "optimum" if row_status == "optimal" else "best known"
+    return best, "best found"
 
 
 def gtsplib_instances(config: TableConfig) -> list[tuple[str, Instance, float]]:
@@ -136,10 +143,14 @@ def run_table(config: TableConfig) -> list[Row]:
         for group, inst, best in gtsplib_instances(config):
             rows += [r.against(best, "best known") for r in _solve_all(config, group, inst, None)]
     for k in config.uav_ks:
-        for inst in uav_instances(k, config.uav_instances, config.set_seed):
+        chosen = uav_set(k, config.instance_dir)
+        for f in chosen.files[:config.uav_instances]:
+            inst = cast(Instance, read_set_file(f)[0])
             found = _solve_all(config, f"UAV K={k}", inst, config.omega)
-            best = min((r.objective for r in found if r.status not in _NO_ANSWER), default=math.nan)
-            rows += [r.against(best, "best found") for r in found]
+            ref = chosen.references.get((f.stem, config.omega))
+            value, kind = reference_for(found, None if ref is None else ref.value,
+                                        None if ref is None else ref.status)
+            rows += [r.against(value, kind) for r in found]
     return rows
 
 
@@ -167,7 +178,8 @@ def markdown(rows: Sequence[Row], solvers: Sequence[str]) -> str:
         names = dict.fromkeys(r.instance for r in rs)
         cells = [cell([r for r in rs if r.solver == s]) if any(r.solver == s for r in rs) else "-"
                  for s in solvers]
-        lines.append(f"| {group} | {len(names)} | {rs[0].reference_kind} | " + " | ".join(cells) + " |")
+        kinds = ", ".join(dict.fromkeys(r.reference_kind for r in rs))
+        lines.append(f"| {group} | {len(names)} | {kinds} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -217,34 +229,32 @@ def read_rows(path: Path) -> list[Row]:
                     reference_kind=r["reference_kind"]) for r in csv.DictReader(f)]
 
 
-class _Parser(argparse.ArgumentParser):
-    """Bad arguments are one ``gtsp-bench: error:`` line and exit code 2, as in the CLI."""
-
-    def error(self, message: str):  # type: ignore[override]
-        self.exit(2, f"gtsp-bench: error: {message}\n")
-
-
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = OneLineParser(
         prog="python -m gtsp_bench.heuristics_table",
-        description="Heuristics and peers on GTSPLIB (by size) and on generated UAV instances of "
-                    "large K: gap and time per group, into docs/solvers/heuristics.md.")
+        description="Heuristics and peers on GTSPLIB (by size) and on the committed UAV sets of "
+                    "large K (instances/uav-K{K}-N20-s1): gap and time per group, into "
+                    "docs/solvers/heuristics.md.")
     p.add_argument("--time-limit", "-t", type=float, default=10.0, metavar="S",
                    help="seconds per solve (default: 10)")
     p.add_argument("--per-group", type=int, default=3, metavar="N",
                    help="GTSPLIB instances per size group, smallest first (default: 3)")
     p.add_argument("--uav-instances", type=int, default=3, metavar="N",
-                   help="generated instances per K (default: 3)")
+                   help="instances per K, the first of the committed set (default: 3)")
     p.add_argument("-K", "--clusters", default=",".join(map(str, UAV_KS)), metavar="LIST",
-                   help="UAV cluster counts (default: 20,50,100,200)")
+                   help="UAV cluster counts, each with a committed set uav-K{K}-N20-s1 "
+                        "(default: 20,50,100,200)")
     p.add_argument("--solvers", "-s", default=",".join(SOLVERS), metavar="LIST",
                    help=f"solvers, comma-separated (default: {','.join(SOLVERS)})")
-    p.add_argument("--omega", type=float, default=0.5, help="omega of the UAV instances (default: 0.5)")
-    p.add_argument("--seed", type=int, default=0, help="instance-set seed (default: 0)")
+    p.add_argument("--omega", type=float, default=0.5,
+                   help="omega of the UAV instances (default: 0.5; the sets' references are at 0.3, "
+                        "0.5 and 0.6)")
+    p.add_argument("--instance-dir", default="instances", metavar="DIR",
+                   help="folder of the committed sets (default: instances)")
     p.add_argument("--solver-seed", type=int, default=0, help="seed of every solve (default: 0)")
     p.add_argument("--max-nodes", type=int, default=15_000, metavar="N",
                    help="largest GTSPLIB instance in nodes (default: 15000)")
-    p.add_argument("--no-gtsplib", action="store_true", help="generated instances only")
+    p.add_argument("--no-gtsplib", action="store_true", help="the UAV sets only")
     p.add_argument("--no-agtsp", action="store_true", help="leave out the asymmetric GTSPLIB files")
     p.add_argument("--csv", default=str(DEFAULT_CSV), metavar="FILE",
                    help=f"one row per solve (default: {DEFAULT_CSV})")
@@ -268,10 +278,10 @@ def make_config(args: argparse.Namespace) -> TableConfig:
         per_group=check_int("--per-group", args.per_group, 0),
         uav_ks=parse_ks(args.clusters) if args.clusters else (),
         uav_instances=check_int("--uav-instances", args.uav_instances, 0),
-        omega=check_omega(args.omega), set_seed=check_seed(args.seed),
-        solver_seed=check_seed(args.solver_seed), gtsplib=not args.no_gtsplib,
+        omega=check_omega(args.omega), solver_seed=check_seed(args.solver_seed), gtsplib=not args.no_gtsplib,
         agtsp=not args.no_agtsp, max_nodes=check_int("--max-nodes", args.max_nodes, 1),
         csv=Path(args.csv), docs=None if args.no_docs else Path(args.docs),
+        instance_dir=Path(args.instance_dir),
     )
 
 
@@ -283,6 +293,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         config = make_config(args)
         if config.docs is not None and not config.docs.is_file():
             raise InputError(f"{config.docs}: no such page for the table")
+        for k in config.uav_ks:
+            uav_set(k, config.instance_dir)  # a K without a committed set fails before any solve
         start = time.perf_counter()
         rows = run_table(config)
         wall = time.perf_counter() - start

@@ -312,3 +312,15 @@ def test_memory_errors_are_one_line_per_command():
     msg = _memory_message("train", MemoryError("Unable to allocate 3 GiB\nmore"))
     assert msg == "out of memory (Unable to allocate 3 GiB); use a smaller --batch or --val-size"
     assert _memory_message("bench", MemoryError()).startswith("out of memory (an allocation failed)")
+
+
+@pytest.mark.parametrize("argv", [["--nope"], ["generate", "--clusters", "x", "-o", "a.json"],
+                                  ["solve"], ["bench", "--bogus"]])
+def test_bad_arguments_read_gtsp_bench_error_in_every_command(capsys, argv):
+    """argparse's complaints, of the main parser and of every sub-command, are the one line
+    'gtsp-bench: error: ...' (never 'gtsp-bench solve: error:'), exit code 2."""
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert err.startswith("gtsp-bench: error: ") and err.count("\n") == 1

@@ -9,7 +9,6 @@ import math
 import pytest
 
 from gtsp_bench import heuristics_table as ht
-from gtsp_bench.generator import MAX_COVER, check_generator_args
 from gtsp_bench.tables import Row
 
 from .conftest import REPO
@@ -19,23 +18,36 @@ PAGE = "# Page\n\ntext before\n\n<!-- BEGIN generated:heuristics-table -->\nold\
 
 
 @pytest.mark.parametrize("k", ht.UAV_KS)
-def test_uav_area_grows_with_k(k):
-    """The clusters cover at most a quarter of the area (the generator takes up to MAX_COVER),
-    and K = 20 keeps the paper's 1,000 m square."""
-    area = ht.uav_area(k)
-    assert k * 100.0**2 / area**2 <= ht.UAV_COVER <= MAX_COVER
-    check_generator_args(k, 20, 50.0, area)
-    assert (area == 1000.0) == (k <= 25)
+def test_uav_sets_are_the_committed_ones(k):
+    """Each K of the table has its committed set of 20 instances of K clusters of 20 nodes."""
+    chosen = ht.uav_set(k, REPO / "instances")
+    assert chosen.name == f"uav-K{k}-N20-s1" and len(chosen.files) == 20
+    first = chosen.files[0].stem
+    assert first == f"uav-K{k}-N20-s1-000" and (first, 0.5) in chosen.references
 
 
-def test_uav_instances_are_seeded_and_sized():
-    """Instance i of K is the same whatever the count; K clusters of 20 nodes, depot at the middle
-    of the lower edge."""
-    a = ht.uav_instances(50, 2, 0)
-    b = ht.uav_instances(50, 1, 0)
-    assert a[0].name == b[0].name == "uav-K50-N20-a1500-s0-000"
-    assert (a[0].coords == b[0].coords).all() and a[0].n_clusters == 50 and a[0].n_nodes == 1000
-    assert a[0].depot.tolist() == [750.0, 0.0] and a[0].coords.max() <= 1500.0
+def test_a_k_without_a_committed_set_is_refused_before_any_solve(tmp_path, capsys):
+    """-K 3 (no uav-K3-N20-s1): one line listing the committed sets, exit 2, nothing written."""
+    argv = ["-K", "3", "--no-gtsplib", "--csv", str(tmp_path / "t.csv"), "--no-docs",
+            "--instance-dir", str(REPO / "instances")]
+    assert ht.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gtsp-bench: error: unknown set 'uav-K3-N20-s1'") and "uav-K20-N20-s1" in err
+    assert err.count("\n") == 1 and not (tmp_path / "t.csv").exists()
+
+
+def _rows(*objectives):
+    return [Row("g", "i", 0.5, f"s{j}", "feasible" if math.isfinite(o) else "failed", o)
+            for j, o in enumerate(objectives)]
+
+
+def test_reference_is_the_sets_value_unless_beaten():
+    """The set's value (optimum / best known) when no solve beat it; the best found otherwise,
+    or when the instance has no reference row."""
+    assert ht.reference_for(_rows(101.0, 100.0), 100.0, "optimal") == (100.0, "optimum")
+    assert ht.reference_for(_rows(101.0, math.nan), 100.0, "best_known") == (100.0, "best known")
+    assert ht.reference_for(_rows(101.0, 99.5), 100.0, "best_known") == (99.5, "best found")
+    assert ht.reference_for(_rows(101.0, 102.0), None, None) == (101.0, "best found")
 
 
 def test_gtsplib_groups_take_the_smallest_of_each_size():
@@ -67,19 +79,22 @@ def test_cells():
 
 
 def test_run_writes_csv_and_the_page_block(tmp_path, capsys):
-    """A tiny run: GTSPLIB up to 20 nodes (3burma14 and the AGTSP 4br17) and one K = 4 instance;
-    greedy+ls refuses the asymmetric file; the page's block is replaced, the text around kept."""
+    """A tiny run: GTSPLIB up to 20 nodes (3burma14 and the AGTSP 4br17) and the first instance of
+    the committed K = 4 set (its reference is dp's optimum); greedy+ls refuses the asymmetric file;
+    the page's block is replaced, the text around kept."""
     page = tmp_path / "page.md"
     page.write_text(PAGE)
     argv = ["--time-limit", "1", "--per-group", "1", "--max-nodes", "20", "-K", "4",
             "--uav-instances", "1", "--solvers", "greedy,greedy+ls", "--csv", str(tmp_path / "t.csv"),
-            "--docs", str(page)]
+            "--docs", str(page), "--instance-dir", str(REPO / "instances")]
     assert ht.main(argv) == 0
     with (tmp_path / "t.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert [(r["instance"], r["solver"], r["status"]) for r in rows if r["status"] == "refused"] == [
         ("4br17", "greedy+ls", "refused")]
     assert {r["group"] for r in rows} == {"GTSPLIB <= 200 nodes", "GTSPLIB AGTSP", "UAV K=4"}
+    assert {(r["instance"], r["reference_kind"]) for r in rows if r["group"] == "UAV K=4"} == {
+        ("uav-K4-N20-s1-000", "optimum")}
     assert all(float(r["gap_percent"]) >= 0 for r in rows if r["status"] != "refused")
     text = page.read_text()
     assert text.startswith("# Page\n\ntext before\n") and text.endswith("text after\n")
