@@ -117,6 +117,24 @@ _K_FORMS = "a range 4..10, a list 4,7,10 or a mix 4..7,10"
 MAX_K = 100_000
 
 
+def parse_names(text: str | Sequence[str], what: str, valid: Sequence[str] | None = None) -> tuple[str, ...]:
+    """Names from ``"a, b,c"`` (or a sequence of names): stripped, empty entries and repeats dropped,
+    in the given order; each must be in ``valid`` when that is given.
+
+    Raises
+    ------
+    InputError
+        ``unknown {what} 'x' (valid: ...)`` for a name outside ``valid``.
+    """
+    parts = text.split(",") if isinstance(text, str) else [str(p) for p in text]
+    names = tuple(dict.fromkeys(p.strip() for p in parts if p.strip()))
+    if valid is not None:
+        for n in names:
+            if n not in valid:
+                raise InputError(f"unknown {what} {n!r} (valid: {', '.join(valid)})")
+    return names
+
+
 def parse_ks(text: object) -> tuple[int, ...]:
     """Parse a set of cluster counts: a range ``4..10``, a list ``4,7,10`` or a mix ``4..7,10``.
 

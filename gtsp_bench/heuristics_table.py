@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import cast
 
-from gtsp_bench.checks import check_float, check_int, check_omega, check_seed, parse_ks
+from gtsp_bench.checks import check_float, check_int, check_omega, check_seed, parse_ks, parse_names
 from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.instance import Instance
 from gtsp_bench.sets import REL_TOL, InstanceSet, read_set_file, resolve_set
@@ -268,11 +268,9 @@ def make_config(args: argparse.Namespace) -> TableConfig:
     """Check the command line's values."""
     from gtsp_bench.registry import solver_names
 
-    solvers = tuple(s.strip() for s in args.solvers.split(",") if s.strip())
-    registered = solver_names()
-    unknown = [s for s in solvers if s not in registered]
-    if not solvers or unknown:
-        raise InputError(f"unknown solver {(unknown or [''])[0]!r} (valid: {', '.join(registered)})")
+    solvers = parse_names(args.solvers, "solver", solver_names())
+    if not solvers:
+        raise InputError("no solver given")
     return TableConfig(
         solvers=solvers, time_limit=check_float("time limit", args.time_limit, 0.0, math.inf),
         per_group=check_int("--per-group", args.per_group, 0),

@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from gtsp_bench.checks import parse_ks
+from gtsp_bench.checks import parse_ks, parse_names
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
 from gtsp_bench.io import atomic_write_text, read_instance
@@ -104,14 +104,10 @@ CSV_COLUMNS = (
 
 # ---------------------------------------------------------------------- configuration
 def _split_names(text: str | Sequence[str], what: str, valid: Sequence[str]) -> tuple[str, ...]:
-    names = text.split(",") if isinstance(text, str) else list(text)
-    names = [n.strip() for n in names if n.strip()]
+    names = parse_names(text, what, valid)
     if not names:
         raise InputError(f"no {what} given")
-    for n in names:
-        if n not in valid:
-            raise InputError(f"unknown {what} {n!r} (valid: {', '.join(valid)})")
-    return tuple(dict.fromkeys(names))
+    return names
 
 
 @dataclass(frozen=True)

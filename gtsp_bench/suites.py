@@ -39,6 +39,7 @@ from gtsp_bench.checks import (
     check_seed,
     check_time_limit,
     parse_ks,
+    parse_names,
     parse_omegas,
 )
 from gtsp_bench.errors import InputError, SolverError
@@ -186,15 +187,10 @@ def parse_exact(text: str) -> tuple[tuple[str, int | None], ...]:
     return tuple(out)
 
 
-def _names(text: str | Sequence[str]) -> tuple[str, ...]:
-    parts = text.split(",") if isinstance(text, str) else list(text)
-    return tuple(p.strip() for p in parts if p.strip())
-
-
 def _solvers(suite: Suite, given: str | Sequence[str]) -> tuple[str, ...]:
     """Registered solver names; for ``learned``, the labels starting with one of the given
     prefixes (``drl`` picks every drl variant)."""
-    names = _names(given)
+    names = parse_names(given, "solver")
     if not names:
         raise InputError("no solver given")
     if suite.name == "learned":
@@ -259,7 +255,7 @@ def make_suite_config(suite: str, *, quick: bool = False, out_dir: str | os.Path
         solver_seed=check_seed(given.get("solver_seed", 0)),
         repeats=check_int("repeats", given.get("repeats", preset.repeats), 1),
         generated=not given.get("no_generated"), gtsplib=gtsplib,
-        names=None if names is None else _names(names) or None,
+        names=None if names is None else parse_names(names, "instance") or None,
         max_nodes=None if max_nodes is None else check_int("max nodes", max_nodes, 1),
         dp_max_k=check_int("dp max K", given.get("dp_max_k", 12), 1),
         exact=parse_exact(given.get("exact", "dp:10,milp")),

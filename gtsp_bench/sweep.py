@@ -147,6 +147,7 @@ def make_sweep_config(
         check_omega,
         check_time_limit,
         parse_ks,
+        parse_names,
         parse_omegas,
     )
     from gtsp_bench.registry import solver_names, solver_specs
@@ -170,8 +171,7 @@ def make_sweep_config(
         raise InputError("a sweep needs a per-solve time limit")
     name_list = None
     if names is not None:
-        parts = names.split(",") if isinstance(names, str) else list(names)
-        name_list = tuple(dict.fromkeys(n.strip() for n in parts if n.strip())) or None
+        name_list = parse_names(names, "instance") or None
     return SweepConfig(
         sets=chosen_sets, solvers=chosen, omegas=tuple(dict.fromkeys(ws)),
         seeds=DEFAULT_SEEDS if seeds is None else parse_seeds(seeds), time_limit=tl,

@@ -203,3 +203,15 @@ def test_time_limit_or_default():
     assert time_limit_or_default(None, 50) == default_time_limit(50) == 25.0
     with pytest.raises(InputError, match="time limit must be > 0 seconds"):
         time_limit_or_default(0, 50)
+
+
+def test_parse_names_strips_dedupes_and_checks():
+    """Comma lists and sequences give the same names, in order, without blanks or repeats; a name
+    outside valid is one line listing the valid ones."""
+    from gtsp_bench.checks import parse_names
+
+    assert parse_names(" a, b,,a ,c", "solver") == ("a", "b", "c")
+    assert parse_names(["b", " a", "", "b"], "solver", ["a", "b"]) == ("b", "a")
+    assert parse_names("", "solver") == ()
+    with pytest.raises(InputError, match=r"^unknown solver 'x' \(valid: a, b\)$"):
+        parse_names("a,x", "solver", ["a", "b"])
