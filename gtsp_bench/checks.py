@@ -4,6 +4,8 @@ naming it; a good one is returned in its canonical type."""
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -446,3 +448,45 @@ def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict
     if "note" in record and not isinstance(record["note"], str):
         raise InputError("note is not a string")
     return record
+
+
+# ---------------------------------------------------------------------- argparse types
+def arg_float(text: str) -> float:
+    """argparse type: a number."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def arg_int(text: str) -> int:
+    """argparse type: an integer."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+
+
+def arg_float_or_none(text: str) -> float | None:
+    """argparse type: a number, or ``none``."""
+    return None if text.strip().lower() == "none" else arg_float(text)
+
+
+def arg_seed(text: str) -> int:
+    """argparse type: a seed (:func:`check_seed`)."""
+    try:
+        return check_seed(arg_int(text))
+    except InputError as e:
+        raise argparse.ArgumentTypeError(f"a {e}") from None
+
+
+def arg_key_value(text: str) -> tuple[str, Any]:
+    """argparse type: ``KEY=VALUE``, the value read as JSON when it parses, else the text."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError:
+        value = raw
+    return key, value

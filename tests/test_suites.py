@@ -102,8 +102,6 @@ def test_parse_exact():
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["bench", "--omegas", "0.5"], "--omegas is an option of the benchmark suites"),
-    (["bench", "--suite", "exact", "--jobs", "2"], "--jobs is an option of the paper's experiments"),
     (["bench", "--suite", "exact", "-K", "7..4"], "bad K '7..4': range 7..4 is reversed"),
     (["bench", "--suite", "heuristics", "-K", "4", "--instances", "1", "--solvers", "nope",
       "--no-gtsplib"], "unknown solver 'nope'"),

@@ -164,11 +164,6 @@ def test_an_asymmetric_gtsplib_instance_is_refused_not_failed(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--set", "x", "--suite", "exact"], "--set runs a sweep of its own: it cannot be combined with --suite"),
-    (["--set", "x", "--experiments", "ratio-k"], "cannot be combined with --experiments"),
-    (["--set", "x", "--reference", "dp"], "--reference is not an option of --set"),
-    (["--seeds", "0,1"], "--seeds is an option of --set"),
-    (["--update-reference", "--suite", "exact"], "--update-reference is an option of --set"),
     (["--set", "no-such-set", "--solvers", "greedy"], "unknown set 'no-such-set'"),
     (["--set", "gtsplib", "--solvers", "greedy", "--seeds", "x"], "bad seeds 'x'"),
 ])
