@@ -35,9 +35,11 @@ def _states(k: int = 8, n: int = 4, view: int = 5):
 
 def test_walk_states_point_at_the_tour():
     """Every state's target is the tour's next cluster; the last step (one candidate) is left out."""
-    (samples, share), orders = _states()
+    (samples, share), _ = _states()
     assert 0 < share <= 1
-    assert len(samples) <= 4 * 7
+    assert len(samples) == round(share * 4 * 7)
+    (whole, all_in), _ = _states(view=8)  # the view holds every cluster: every step is a state
+    assert all_in == 1.0 and len(whole) == 4 * 7
     assert samples.mask[torch.arange(len(samples)), samples.target].all()
     # the first state of each tour: all 8 clusters left, 5 in view
     assert samples.mask[:4].sum(1).tolist() == [5] * 4
@@ -71,7 +73,7 @@ def test_tiny_run_writes_policy_log_and_meta(tmp_path):
     assert meta["steps_trained"] == 4 and [list(m) for m in meta["train"]["mix"]] == [[5, 3, 1000.0]]
     assert json.loads((tmp_path / "p.json").read_text())["command"].startswith(
         "python -m gtsp_bench.solvers.learned.imitation --recipe local-small")
-    lines = (tmp_path / "p.train.csv").read_text().splitlines()
+    lines = (tmp_path / "p.imitation.csv").read_text().splitlines()
     assert lines[0] == ",".join(LOG_COLUMNS) and len(lines) == 4
     assert (tmp_path / "p.labels.npz").is_file()
     assert train(cfg, out, progress=False)["label_wall_s"] == 0.0

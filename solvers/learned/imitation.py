@@ -18,7 +18,8 @@ better spent imitating good tours (as LEHD and BQ-NCO train). A run:
    ``lns``; the policy with the best validation gap is kept.
 
 Files, beside ``-o CKPT``: ``CKPT`` (the policy), ``CKPT.json`` (command, mix, times, scores,
-config), ``CKPT.train.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``).
+config), ``CKPT.imitation.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``; not named
+``.train.csv``: the runner's training figure reads those, REINFORCE logs of reward and energy).
 
     python -m gtsp_bench.solvers.learned.imitation --recipe local -o local.pt
 """
@@ -290,7 +291,7 @@ def output_paths(ckpt: str | Path) -> dict[str, Path]:
     """The files of a run, from the policy file's path."""
     p = Path(ckpt)
     stem = p.with_suffix("")
-    return {"policy": p, "meta": stem.with_suffix(".json"), "log": Path(f"{stem}.train.csv"),
+    return {"policy": p, "meta": stem.with_suffix(".json"), "log": Path(f"{stem}.imitation.csv"),
             "labels": Path(f"{stem}.labels.npz")}
 
 
