@@ -106,7 +106,7 @@ def run_cell(solver: Any, cell: Cell, repeats: int = 1) -> tuple[np.ndarray, flo
 def table(results: dict[tuple[str, int], list[tuple[np.ndarray, float]]], solvers: Sequence[str],
           ks: Sequence[int], counts: dict[int, int]) -> str:
     """The text table: one line per solver, a ``gap % / ms`` cell per K (means over omegas)."""
-    width = 15
+    width = 18
     head = f"{'solver':<8}" + "".join(f"{f'K={k} (n={counts.get(k, 0)})':>{width}}" for k in ks)
     lines = [head, "-" * len(head)]
     for name in solvers:
