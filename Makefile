@@ -9,7 +9,7 @@ K      ?= 4..10
 BENCH_ARGS ?=
 SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-glns bench-sets bench-scale clean
+.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-learned train-local bench-glns bench-sets bench-scale clean
 
 install: $(STAMP)
 
@@ -55,6 +55,19 @@ bench-heuristics-table: $(STAMP)
 
 bench-drl: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
+
+# Every learned policy (greedy as the baseline) from K = 4 to 200: mean gap per K and ms per
+# instance (gtsp_bench/learned_table.py; LEARNED_ARGS for options, e.g. LEARNED_ARGS="--clusters 4,20").
+LEARNED_ARGS ?=
+bench-learned: $(STAMP)
+	$(BIN)/python -m gtsp_bench.learned_table $(LEARNED_ARGS)
+
+# Train the local-view policy by imitating lns tours (the shipped checkpoints/local.pt; about 45
+# minutes on one core: labels, then 27 minutes of training). TRAIN_ARGS for more options.
+TRAIN_ARGS ?=
+train-local: $(STAMP)
+	$(BIN)/python -m gtsp_bench.solvers.learned.imitation --recipe local \
+		-o solvers/learned/checkpoints/local.pt $(TRAIN_ARGS)
 
 # lns against GLNS on its 45 GTSPLIB instances (benchmarks/glns.py --help; GLNS_ARGS for options,
 # e.g. GLNS_ARGS="--seeds 3 --jobs 2", or "--large" for the 1,000-15,112-node files at 60 s).

@@ -56,6 +56,8 @@ BUILTIN: tuple[Builtin, ...] = (
             "paper's policy: best of the greedy and 64 sampled tours", bench=False),
     Builtin("am", f"{_L}.solver:AM",
             "attention model, best of K greedy POMO starts, optimal heads for the order"),
+    Builtin("local", f"{_L}.local_solver:Local",
+            "local-view policy re-encoded each step (imitation of lns), greedy; -p starts=S rotated views"),
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),

@@ -11,6 +11,7 @@ pytest.importorskip("torch")
 from gtsp_bench.solvers.learned.am import AttentionPolicy
 from gtsp_bench.solvers.learned.baselines import BASELINES
 from gtsp_bench.solvers.learned.drl import PointerPolicy
+from gtsp_bench.solvers.learned.local import LocalPolicy
 from gtsp_bench.solvers.learned.policies import POLICIES, build_policy, get_policy
 
 from gtsp_bench.errors import InputError
@@ -22,12 +23,14 @@ PACKAGE = "gtsp_bench.solvers.learned"
 
 
 def test_registry_names_each_policy_and_its_baselines():
-    """drl is the pointer network, am the attention model; each supports registered baselines
-    and writes its own name as the config's model."""
-    assert {"drl": PointerPolicy, "am": AttentionPolicy} == POLICIES
+    """drl is the pointer network, am the attention model, local the local-view policy; the
+    REINFORCE-trained ones support registered baselines (local is trained by imitation: none),
+    and each writes its own name as the config's model."""
+    assert {"drl": PointerPolicy, "am": AttentionPolicy, "local": LocalPolicy} == POLICIES
     assert get_policy("am") is AttentionPolicy
+    assert LocalPolicy.baselines == ()
     for name, cls in POLICIES.items():
-        assert cls.baselines and set(cls.baselines) <= set(BASELINES)
+        assert (bool(cls.baselines) != (name == "local")) and set(cls.baselines) <= set(BASELINES)
         small = {"n_nodes": 3, "dim": 8} if name == "drl" else {"dim": 8, "n_heads": 2, "ff": 16}
         assert build_policy({"model": name, **small}).config["model"] == name
 
@@ -42,7 +45,7 @@ def test_build_policy_round_trips_a_config():
 
 def test_unknown_model_or_bad_arguments_are_input_errors():
     """The getter lists the valid names; arguments the class does not take are one clear error."""
-    with pytest.raises(InputError, match="model must be one of 'drl', 'am', got 'lstm'"):
+    with pytest.raises(InputError, match="model must be one of 'drl', 'am', 'local', got 'lstm'"):
         get_policy("lstm")
     with pytest.raises(InputError, match="model must be one of"):
         build_policy({"dim": 8})
@@ -67,7 +70,8 @@ def test_learned_modules_import_without_a_cycle():
     policies are imported by the registry, never the other way round."""
     graph = {p.stem: _learned_imports(p) for p in LEARNED.glob("*.py") if p.stem != "__init__"}
     assert "rl_common" not in graph and graph["policies"] >= {"drl", "am"}
-    assert not (graph["drl"] | graph["am"]) & {"policies", "checkpoint", "solver", "train", "recipes"}
+    assert not (graph["drl"] | graph["am"] | graph["local"]) & {"policies", "checkpoint", "solver", "train",
+                                                                "recipes", "imitation"}
     done: set[str] = set()
 
     def visit(name: str, path: tuple[str, ...]) -> None:

@@ -14,6 +14,7 @@ import torch
 from gtsp_bench.solvers.learned.am import AttentionPolicy
 from gtsp_bench.solvers.learned.drl import PointerPolicy
 from gtsp_bench.solvers.learned.env import EnvBatch
+from gtsp_bench.solvers.learned.local import LocalPolicy
 from torch import nn
 
 from gtsp_bench.checks import check_choice
@@ -36,7 +37,8 @@ class Policy(Protocol):
 
 
 #: Policy classes by name (the ``"model"`` key of a config, the ``model`` of a recipe).
-POLICIES: dict[str, type[nn.Module]] = {"drl": PointerPolicy, "am": AttentionPolicy}
+POLICIES: dict[str, type[nn.Module]] = {"drl": PointerPolicy, "am": AttentionPolicy,
+                                         "local": LocalPolicy}
 
 
 def get_policy(name: str) -> type[nn.Module]:

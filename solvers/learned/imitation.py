@@ -1,0 +1,436 @@
+"""Imitation training of the local-view policy (:mod:`~.local`) on near-optimal tours.
+
+REINFORCE needs many sampled tours per useful gradient; a CPU budget of under an hour is far
+better spent imitating good tours (as LEHD and BQ-NCO train). A run:
+
+1. **Labels**: for each ``(K, count, area)`` of the recipe's mix, instances
+   ``instance_set(count, K, label_seed, area=area)`` (a seed no test set uses), omega of instance
+   i drawn from ``[label_seed, K, i]`` uniform in ``[0, omega_max]``, each solved by ``lns``
+   with ``stop_at_convergence``. Labels are cached (``CKPT.labels.npz``; reused when the mix
+   matches, so a second run skips them).
+2. **States**: every label tour is walked from the depot, forwards and backwards (both
+   directions cost the same with optimal heads), through the same :class:`~.local.Walk` that
+   decoding uses; each step's view and the position of the tour's next cluster in it is one
+   sample (steps whose next cluster is outside the view, or with one candidate left, are left out).
+3. **Training**: cross-entropy on the next cluster, each sample's vectors turned by a random
+   rotation and mirror (the problem's symmetry), Adam with a cosine learning rate over the time
+   budget. Validation: greedy decoding (one start, optimal heads) on a fixed K = 50 set against
+   ``lns``; the policy with the best validation gap is kept.
+
+Files, beside ``-o CKPT``: ``CKPT`` (the policy), ``CKPT.json`` (command, mix, times, scores,
+config), ``CKPT.imitation.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``; not named
+``.train.csv``: the runner's training figure reads those, REINFORCE logs of reward and energy).
+
+    python -m gtsp_bench.solvers.learned.imitation --recipe local -o local.pt
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import io
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from gtsp_bench.solvers.learned.checkpoint import save_policy
+from gtsp_bench.solvers.learned.env import EnvBatch, env_from_instances, optimal_heads_batch
+from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, turn
+from torch import nn
+
+from gtsp_bench.checks import check_choice, check_float, check_int, check_seed
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import instance_set
+from gtsp_bench.io import atomic_write_bytes, atomic_write_text
+
+#: Seeds of the validation set (never used for training or testing).
+VAL_SEED = 818_273
+LOG_COLUMNS = ("step", "loss", "accuracy", "lr", "val_gap_pct", "wall_s")
+
+
+@dataclass(frozen=True)
+class ImitationConfig:
+    """Settings of one imitation run.
+
+    Attributes
+    ----------
+    recipe
+        Name in :data:`RECIPES` these settings start from.
+    mix
+        ``(K, instances, area)`` label sets: K clusters, how many instances, square side (m).
+    nodes
+        N, nodes per cluster.
+    omega_max
+        Label omegas are uniform in ``[0, omega_max]``.
+    label_seed
+        Instance-set seed of the labels (no test set may use it).
+    model_options
+        :class:`~.local.LocalPolicy` arguments.
+    batch, lr, max_time, steps, seed, threads
+        Samples per step, peak learning rate, training wall budget (s), step cap, seed, torch
+        threads.
+    val
+        ``(K, instances, area)`` of the validation set.
+    val_every, log_every
+        Steps between validations and between log rows.
+    """
+
+    recipe: str
+    mix: tuple[tuple[int, int, float], ...]
+    nodes: int = 20
+    omega_max: float = 0.9
+    label_seed: int = 71_000
+    model_options: dict[str, Any] = field(default_factory=dict)
+    batch: int = 256
+    lr: float = 1e-3
+    max_time: float = 1800.0
+    steps: int = 1_000_000
+    seed: int = 0
+    threads: int = 1
+    val: tuple[int, int, float] = (50, 24, 1500.0)
+    val_every: int = 500
+    log_every: int = 100
+
+    def __post_init__(self) -> None:
+        if not self.mix:
+            raise InputError("the label mix is empty")
+        for k, n, area in (*self.mix, self.val):
+            check_int("K", k, 2)
+            check_int("instances", n, 1)
+            check_float("area", area, 0.0, math.inf)
+        check_float("omega_max", self.omega_max, 0.0, 1.0, open_low=False)
+        for name in ("nodes", "batch", "steps", "threads", "val_every", "log_every"):
+            check_int(name, getattr(self, name), 1)
+        check_float("learning rate", self.lr, 0.0, math.inf)
+        check_float("max time", self.max_time, 0.0, math.inf)
+        check_seed(self.seed)
+        check_seed(self.label_seed)
+        if self.label_seed in (1, 5_000, 6_000):
+            raise InputError(f"label seed {self.label_seed} is a test set's seed")
+
+    def command(self, output: str | Path) -> str:
+        """The command line that repeats this run."""
+        return (f"python -m gtsp_bench.solvers.learned.imitation --recipe {self.recipe} "
+                f"--max-time {self.max_time:g} --seed {self.seed} -o {output}")
+
+
+#: The named recipes. ``local``: the shipped ``checkpoints/local.pt``; ``local-small``: a short
+#: run on fewer labels (the fallback, and a quick check that training works).
+RECIPES: dict[str, ImitationConfig] = {
+    "local": ImitationConfig(
+        recipe="local",
+        mix=((10, 1000, 1000.0), (20, 2500, 1000.0), (30, 1500, 1200.0), (50, 700, 1500.0),
+             (100, 40, 2000.0)),
+        max_time=1620.0,
+    ),
+    "local-small": ImitationConfig(
+        recipe="local-small",
+        mix=((10, 300, 1000.0), (20, 600, 1000.0), (30, 300, 1200.0)),
+        max_time=300.0,
+    ),
+}
+
+
+def get_recipe(name: str, **overrides: Any) -> ImitationConfig:
+    """The recipe ``name`` with fields changed (checked again)."""
+    base = RECIPES[check_choice("recipe", name, tuple(RECIPES))]
+    return dataclasses.replace(base, **overrides)
+
+
+# ---------------------------------------------------------------------- labels
+def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max: float,
+              ) -> tuple[list[Any], np.ndarray]:
+    """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``)."""
+    insts = instance_set(count, k, seed, nodes, area=area)
+    omegas = np.array([np.random.default_rng([seed, k, i, 7]).uniform(0.0, omega_max)
+                       for i in range(count)])
+    return insts, omegas
+
+
+def solve_labels(insts: Sequence[Any], omegas: Sequence[float], say: Any = None,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Orders ``(n, K)`` and objectives ``(n,)`` of ``lns`` (stop at convergence) on each."""
+    from gtsp_bench.energy import evaluate
+    from gtsp_bench.registry import get_solver
+
+    lns = get_solver("lns", stop_at_convergence=True)
+    orders, values = [], []
+    for i, (inst, w) in enumerate(zip(insts, omegas, strict=True)):
+        sol = lns.solve(inst, float(w), time_limit=120.0, seed=i)
+        orders.append(sol.order)
+        values.append(evaluate(inst, float(w), sol.order, sol.heads).objective)
+        if say is not None and (i + 1) % 100 == 0:
+            say(f"labels K={inst.n_clusters}: {i + 1}/{len(insts)}")
+    return np.array(orders, dtype=np.int64), np.array(values)
+
+
+def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = None,
+                         ) -> tuple[dict[tuple[int, int, float], np.ndarray], float]:
+    """Label orders per mix entry, from ``cache`` when it holds that entry; returns them and the
+    seconds spent solving new ones (new ones are added to the cache)."""
+    stored: dict[str, np.ndarray] = {}
+    if cache is not None and cache.is_file():
+        with np.load(cache) as f:
+            stored = {key: f[key] for key in f.files}
+    out, spent = {}, 0.0
+    for k, n, area in cfg.mix:
+        key = f"K{k}_n{n}_a{area:g}_s{cfg.label_seed}_w{cfg.omega_max:g}_N{cfg.nodes}"
+        if key not in stored:
+            t = time.perf_counter()
+            insts, omegas = label_set(k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
+            stored[key] = solve_labels(insts, omegas, say)[0]
+            spent += time.perf_counter() - t
+            if cache is not None:
+                buf = io.BytesIO()
+                np.savez_compressed(buf, **stored)
+                atomic_write_bytes(cache, buf.getvalue())
+        out[(k, n, area)] = stored[key]
+    return out, spent
+
+
+# ---------------------------------------------------------------------- states
+@dataclass(frozen=True)
+class Samples:
+    """Training states: view features, the candidate mask and the target position in the view."""
+
+    cand_vec: torch.Tensor
+    cand_sc: torch.Tensor
+    ctx_vec: torch.Tensor
+    ctx_sc: torch.Tensor
+    mask: torch.Tensor
+    target: torch.Tensor
+
+    def __len__(self) -> int:
+        return len(self.target)
+
+    def take(self, idx: torch.Tensor) -> Samples:
+        return Samples(*(getattr(self, f.name)[idx] for f in dataclasses.fields(self)))
+
+    @staticmethod
+    def join(parts: Sequence[Samples]) -> Samples:
+        return Samples(*(torch.cat([getattr(p, f.name) for p in parts])
+                         for f in dataclasses.fields(Samples)))
+
+
+def walk_states(env: EnvBatch, orders: torch.Tensor, k: int) -> tuple[Samples, float]:
+    """The samples of walking ``orders`` ``(B, K)`` on ``env`` and the share of steps whose next
+    cluster was in the view (of those with at least two candidates)."""
+    walk = Walk(env, 1, k, _flight_per_m(env))
+    parts, seen, total = [], 0, 0
+    for t in range(orders.shape[1]):
+        v = walk.view()
+        target = orders[:, t]
+        hit = v.cluster == target[:, None]
+        pos = hit.float().argmax(1)
+        ok = hit.any(1) & (v.mask.sum(1) >= 2)
+        total += int((v.mask.sum(1) >= 2).sum())
+        seen += int(ok.sum())
+        if ok.any():
+            parts.append(Samples(v.cand_vec[ok], v.cand_sc[ok], v.ctx_vec[ok], v.ctx_sc[ok],
+                                 v.mask[ok], pos[ok]))
+        walk.goto(target)
+    return Samples.join(parts), seen / max(total, 1)
+
+
+def build_samples(cfg: ImitationConfig, labels: dict[tuple[int, int, float], np.ndarray], k: int,
+                  ) -> tuple[Samples, dict[str, float]]:
+    """Every state of every label tour in both directions; the in-view share per K."""
+    parts, coverage = [], {}
+    for (kk, n, area), orders in labels.items():
+        insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
+        for lo in range(0, n, 500):
+            env = env_from_instances(insts[lo:lo + 500], omegas[lo:lo + 500].tolist())
+            o = torch.from_numpy(orders[lo:lo + 500])
+            for direction in (o, o.flip(1)):
+                s, share = walk_states(env, direction, k)
+                parts.append(s)
+                coverage[str(kk)] = share
+    return Samples.join(parts), coverage
+
+
+def random_maps(n: int, generator: torch.Generator) -> torch.Tensor:
+    """``(n, 2, 2)`` random rotations, half of them mirrored."""
+    a = torch.rand(n, generator=generator) * 2 * math.pi
+    c, s = torch.cos(a), torch.sin(a)
+    rot = torch.stack([torch.stack([c, -s], -1), torch.stack([s, c], -1)], -2)
+    flip = torch.where(torch.rand(n, generator=generator) < 0.5, -1.0, 1.0)
+    rot[:, :, 0] = rot[:, :, 0] * flip[:, None]
+    return rot
+
+
+def imitation_loss(model: LocalPolicy, batch: Samples, maps: torch.Tensor,
+                   ) -> tuple[torch.Tensor, float]:
+    """Cross-entropy of the target candidates, and the share the model ranks first."""
+    logits = model.scores(*turn((batch.cand_vec, batch.cand_sc, batch.ctx_vec, batch.ctx_sc), maps),
+                          batch.mask)
+    loss = nn.functional.cross_entropy(logits, batch.target)
+    acc = float((logits.argmax(-1) == batch.target).float().mean())
+    return loss, acc
+
+
+def greedy_gap(model: LocalPolicy, env: EnvBatch, ref: torch.Tensor) -> float:
+    """Mean gap (%) of one-start greedy decoding with optimal heads to ``ref``."""
+    model.eval()
+    with torch.inference_mode():
+        order, _ = model.decode(env, starts=1)
+        cost = optimal_heads_batch(env, order)[1]
+    model.train()
+    return float(((cost / ref - 1) * 100).mean())
+
+
+# ---------------------------------------------------------------------- run
+def output_paths(ckpt: str | Path) -> dict[str, Path]:
+    """The files of a run, from the policy file's path."""
+    p = Path(ckpt)
+    stem = p.with_suffix("")
+    return {"policy": p, "meta": stem.with_suffix(".json"), "log": Path(f"{stem}.imitation.csv"),
+            "labels": Path(f"{stem}.labels.npz")}
+
+
+def _write_log(path: Path, rows: list[dict[str, Any]]) -> None:
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=LOG_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_text(path, out.getvalue())
+
+
+def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None = None,
+          progress: bool = True) -> dict[str, Any]:
+    """Run ``cfg`` (labels, states, training); returns the JSON metadata written beside it."""
+    def say(text: str) -> None:
+        if progress:
+            print(text, file=sys.stderr, flush=True)
+
+    torch.set_num_threads(cfg.threads)
+    torch.manual_seed(cfg.seed)
+    paths = output_paths(output)
+    cache = Path(labels) if labels else paths["labels"]
+    start = time.perf_counter()
+    label_orders, label_s = load_or_solve_labels(cfg, cache, say)
+    model = LocalPolicy(**cfg.model_options)
+    data, coverage = build_samples(cfg, label_orders, model.k)
+    say(f"{len(data)} states; next cluster in view: {coverage}")
+    vk, vn, varea = cfg.val
+    vinsts = instance_set(vn, vk, VAL_SEED, cfg.nodes, area=varea)
+    vomegas = [0.3 if i % 2 == 0 else 0.6 for i in range(vn)]
+    vref = solve_labels(vinsts, vomegas)[1]
+    venv = env_from_instances(vinsts, vomegas)
+    vref_t = torch.from_numpy(vref)
+    prep_s = time.perf_counter() - start
+    gen = torch.Generator().manual_seed(cfg.seed)
+    opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    rows: list[dict[str, Any]] = []
+    best, best_step = math.inf, 0
+    t0 = time.perf_counter()
+    window: list[tuple[float, float]] = []
+    step = 0
+    model.train()
+    meta: dict[str, Any] = {}
+    while step < cfg.steps:
+        wall = time.perf_counter() - t0
+        if wall >= cfg.max_time:
+            break
+        lr = cfg.lr * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * wall / cfg.max_time)))
+        for g in opt.param_groups:
+            g["lr"] = lr
+        idx = torch.randint(len(data), (cfg.batch,), generator=gen)
+        loss, acc = imitation_loss(model, data.take(idx), random_maps(cfg.batch, gen))
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        opt.step()
+        step += 1
+        window.append((float(loss.detach()), acc))
+        if step % cfg.log_every == 0:
+            row: dict[str, Any] = {"step": step, "loss": float(np.mean([w[0] for w in window])),
+                                   "accuracy": float(np.mean([w[1] for w in window])), "lr": lr,
+                                   "val_gap_pct": "", "wall_s": round(time.perf_counter() - t0, 1)}
+            window = []
+            if step % cfg.val_every == 0:
+                gap = greedy_gap(model, venv, vref_t)
+                row["val_gap_pct"] = gap
+                if gap < best:
+                    best, best_step = gap, step
+                    save_policy(model, paths["policy"])
+                say(f"step {step}: loss {row['loss']:.4f} acc {row['accuracy']:.3f} "
+                    f"val gap {gap:.2f} % (best {best:.2f} % at {best_step})")
+            rows.append(row)
+            _write_log(paths["log"], rows)
+            meta = _meta(cfg, paths, step, best, best_step, label_s, prep_s, time.perf_counter() - t0,
+                         coverage, len(data))
+            atomic_write_text(paths["meta"], json.dumps(meta, indent=2) + "\n")
+    gap = greedy_gap(model, venv, vref_t)
+    if gap < best:
+        best, best_step = gap, step
+        save_policy(model, paths["policy"])
+    rows.append({"step": step, "loss": "", "accuracy": "", "lr": "", "val_gap_pct": gap,
+                 "wall_s": round(time.perf_counter() - t0, 1)})
+    _write_log(paths["log"], rows)
+    meta = _meta(cfg, paths, step, best, best_step, label_s, prep_s, time.perf_counter() - t0,
+                 coverage, len(data))
+    atomic_write_text(paths["meta"], json.dumps(meta, indent=2) + "\n")
+    return meta
+
+
+def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, best_step: int,
+          label_s: float, prep_s: float, train_s: float, coverage: dict[str, float],
+          n_states: int) -> dict[str, Any]:
+    return {
+        "model": "local",
+        "command": cfg.command(paths["policy"]),
+        "seed": cfg.seed,
+        "steps": best_step,
+        "steps_trained": step,
+        "label_wall_s": round(label_s, 1),
+        "prep_wall_s": round(prep_s, 1),
+        "wall_s": round(train_s, 1),
+        "val_gap_pct": best,
+        "validation": {"seed": VAL_SEED, "clusters": cfg.val[0], "instances": cfg.val[1],
+                       "area": cfg.val[2], "omega": [0.3, 0.6], "reference": "lns stop_at_convergence",
+                       "decoding": "greedy, one start, optimal heads"},
+        "states": n_states,
+        "next_in_view": coverage,
+        "config": LocalPolicy(**cfg.model_options).config,
+        "train": dataclasses.asdict(cfg),
+        "torch": torch.__version__,
+    }
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m gtsp_bench.solvers.learned.imitation``: train the local-view policy."""
+    p = argparse.ArgumentParser(prog="python -m gtsp_bench.solvers.learned.imitation",
+                                description="train the local-view policy by imitating lns tours")
+    p.add_argument("--recipe", default="local", help=f"one of {', '.join(RECIPES)} (default: local)")
+    p.add_argument("--max-time", type=float, default=None, help="training seconds (default: the recipe's)")
+    p.add_argument("--seed", type=int, default=None, help="seed of the weights and batches")
+    p.add_argument("--labels", default=None, help="label cache (default: CKPT.labels.npz)")
+    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    p.add_argument("-o", "--output", required=True, help="policy file to write")
+    args = p.parse_args(argv)
+    try:
+        over: dict[str, Any] = {}
+        if args.max_time is not None:
+            over["max_time"] = args.max_time
+        if args.seed is not None:
+            over["seed"] = args.seed
+        cfg = get_recipe(args.recipe, **over)
+        meta = train(cfg, args.output, labels=args.labels, progress=not args.no_progress)
+    except InputError as e:
+        print(f"gtsp-bench: error: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.output}: step {meta['steps']} of {meta['steps_trained']}, "
+          f"validation gap {meta['val_gap_pct']:.2f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,283 @@
+"""Beyond the paper: a local-view policy that re-encodes its neighbourhood at every step.
+
+Why: a policy that embeds all K clusters once (``drl``, ``am``) sees a different input
+distribution at every K, and its decisions drift as K grows. The policies that generalise in the
+learned-routing literature (INViT, ELG: local nearest-neighbour views; LEHD, BQ-NCO: a heavy
+decoder that re-encodes the remaining state each step) see a state whose form and scale do not
+depend on K. This one does both in a small way:
+
+* **The view** (:class:`Walk`, :class:`View`): at each step, the ``k`` unvisited clusters whose
+  centroids are nearest to the UAV's current point ``p``. For each candidate, the rule's entry
+  node from ``p`` (the node with the least weighted energy from ``p``: edge cost plus node cost,
+  the paper's head rule) and the cluster centroid, both relative to ``p`` and divided by the
+  local scale ``s`` (the distance to the farthest candidate's centroid); the entry node's node
+  cost above the cluster's cheapest node in metres of flight (cost / edge cost per metre) over
+  ``s``; and the candidate's distance to the depot. The context token: omega, the fraction of
+  clusters left, the unit direction to the depot and to the centre of mass of the unvisited
+  clusters and their distances over ``s`` (as ``log1p``). Node costs (ground energy weighted by
+  omega, :func:`gtsp_bench.problem.price`) thus enter through the entry rule and the excess
+  feature. Nothing in the state grows with K.
+* **The decoder** (:class:`LocalPolicy`): a small transformer over the ``k + 1`` tokens,
+  re-run at every step (the whole state is re-encoded each step, as LEHD's heavy decoder), and
+  a score per candidate; greedy takes the best.
+* **Starts**: the problem is invariant under rotations and reflections of the plane, and every
+  input vector is relative, so each of ``starts`` decodings sees the view turned by its own
+  rotation (odd starts also mirrored): POMO-style instance augmentation, the best tour kept.
+* **Heads**: the policy picks the order; the heads are the optimal ones for that order
+  (:func:`~gtsp_bench.solvers.learned.env.optimal_heads_batch`) or the paper's rule.
+
+The model is trained by imitation of near-optimal tours (:mod:`~.imitation`), not REINFORCE.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import torch
+from gtsp_bench.solvers.learned.env import EnvBatch
+from torch import nn
+
+#: Scalars per candidate token and per context token; 2-D vectors per candidate and context.
+CAND_SCALARS, CTX_SCALARS, CAND_VECTORS, CTX_VECTORS = 2, 3, 2, 2
+#: The node-cost excess feature (metres of flight over the local scale) is clipped to this.
+EXCESS_CLIP = 5.0
+#: Edge cost per metre is floored at this fraction of the UAV's flight energy per metre before
+#: dividing node costs by it (omega = 1 makes flight free).
+MIN_EDGE_FRACTION = 0.05
+
+
+@dataclass(frozen=True)
+class View:
+    """The local view of ``R`` walks at one step (float32 features).
+
+    Attributes
+    ----------
+    cand_vec
+        ``(R, k, 2, 2)``: entry node and centroid of each candidate, relative to the current
+        point, over the local scale.
+    cand_sc
+        ``(R, k, 2)``: node-cost excess of the entry node (metres of flight over the local scale,
+        clipped) and ``log1p`` of the candidate's centroid-to-depot distance over the scale.
+    ctx_vec
+        ``(R, 2, 2)``: unit directions to the depot and to the unvisited clusters' centre of mass.
+    ctx_sc
+        ``(R, 3)``: omega, the fraction of clusters left, ``log1p`` of the depot's distance over
+        the scale.
+    mask
+        ``(R, k)``: which candidates exist (fewer than ``k`` clusters may be left).
+    cluster
+        ``(R, k)``: cluster index of each candidate.
+    entry_xy
+        ``(R, k, 2)``: the entry node's coordinates (m), float64.
+    """
+
+    cand_vec: torch.Tensor
+    cand_sc: torch.Tensor
+    ctx_vec: torch.Tensor
+    ctx_sc: torch.Tensor
+    mask: torch.Tensor
+    cluster: torch.Tensor
+    entry_xy: torch.Tensor
+
+
+class Walk:
+    """``S`` walks per instance of a batch through its clusters, from the depot.
+
+    Parameters
+    ----------
+    env
+        The batch (B instances).
+    starts
+        Walks per instance (rows ``i * starts .. i * starts + starts - 1`` are instance i's).
+    k
+        Candidates in the view.
+    flight_per_m
+        The UAV's flight energy per metre (J/m) of the instances, for the floor on the edge cost.
+    """
+
+    def __init__(self, env: EnvBatch, starts: int, k: int, flight_per_m: torch.Tensor) -> None:
+        b, n_clusters, _ = env.shape
+        self.env = env
+        self.inst = torch.arange(b).repeat_interleave(starts)
+        self.r = b * starts
+        self.n_clusters = n_clusters
+        self.k = k
+        self.cent = env.coords.mean(2)  # (B, K, 2)
+        self.depot = env.depot[self.inst]  # (R, 2)
+        self.pos = self.depot.clone()
+        self.visited = torch.zeros((self.r, n_clusters), dtype=torch.bool)
+        w = env.edge_per_m[self.inst]
+        self.edge = w  # (R,)
+        self.per_m = torch.maximum(w, MIN_EDGE_FRACTION * flight_per_m[self.inst])
+        self.omega = env.omega[self.inst]
+        self.rows = torch.arange(self.r)
+
+    def view(self) -> View:
+        """The view from the current points."""
+        cent = self.cent[self.inst]  # (R, K, 2)
+        d = (cent - self.pos[:, None]).pow(2).sum(-1).sqrt().masked_fill(self.visited, math.inf)
+        dist, cluster = d.topk(min(self.k, self.n_clusters), dim=1, largest=False)
+        if self.k > self.n_clusters:  # fewer clusters than candidates: pad (masked below)
+            extra = self.k - self.n_clusters
+            dist = torch.cat([dist, dist.new_full((self.r, extra), math.inf)], 1)
+            cluster = torch.cat([cluster, cluster.new_zeros((self.r, extra))], 1)
+        mask = torch.isfinite(dist)
+        cluster = torch.where(mask, cluster, cluster[:, :1])
+        scale = dist.masked_fill(~mask, 0.0).max(1).values.clamp_min(1.0)  # (R,)
+        ii = self.inst[:, None]
+        xy = self.env.coords[ii, cluster]  # (R, k, N, 2)
+        nc = self.env.node_cost[ii, cluster]  # (R, k, N)
+        reach = (xy - self.pos[:, None, None]).pow(2).sum(-1).sqrt()
+        j = (self.edge[:, None, None] * reach + nc).argmin(-1)  # (R, k)
+        entry_xy = xy.gather(2, j[..., None, None].expand(-1, -1, 1, 2))[:, :, 0]
+        excess = nc.gather(2, j[..., None])[..., 0] - nc.min(-1).values
+        s = scale[:, None]
+        excess = (excess / self.per_m[:, None] / s).clamp(0.0, EXCESS_CLIP)
+        c_xy = cent.gather(1, cluster[..., None].expand(-1, -1, 2))
+        home = (c_xy - self.depot[:, None]).pow(2).sum(-1).sqrt() / s
+        rel = torch.stack([entry_xy - self.pos[:, None], c_xy - self.pos[:, None]], 2)
+        cand_vec = rel / s[..., None, None]
+        cand_sc = torch.stack([excess, torch.log1p(home)], -1)
+        left = ~self.visited
+        n_left = left.sum(1).clamp_min(1)
+        mass = (cent * left[..., None]).sum(1) / n_left[:, None]
+        to_depot = self.depot - self.pos
+        to_mass = mass - self.pos
+        dd = to_depot.norm(dim=-1)
+        ctx_vec = torch.stack([to_depot / dd.clamp_min(1e-6)[:, None],
+                               to_mass / to_mass.norm(dim=-1).clamp_min(1e-6)[:, None]], 1)
+        ctx_sc = torch.stack([self.omega, n_left / self.n_clusters, torch.log1p(dd / scale)], -1)
+        zero = ~mask
+        return View(cand_vec.masked_fill(zero[..., None, None], 0.0).float(),
+                    cand_sc.masked_fill(zero[..., None], 0.0).float(), ctx_vec.float(),
+                    ctx_sc.float(), mask, cluster, entry_xy)
+
+    def goto(self, cluster: torch.Tensor) -> None:
+        """Visit ``cluster`` ``(R,)`` (any unvisited one) through its entry node from the
+        current point: how a known tour is walked (imitation) to the same states as decoding."""
+        ii = self.inst
+        xy = self.env.coords[ii, cluster]  # (R, N, 2)
+        nc = self.env.node_cost[ii, cluster]
+        reach = (xy - self.pos[:, None]).pow(2).sum(-1).sqrt()
+        j = (self.edge[:, None] * reach + nc).argmin(-1)
+        self.pos = xy[self.rows, j]
+        self.visited = self.visited.clone()
+        self.visited[self.rows, cluster] = True
+
+    def move(self, view: View, choice: torch.Tensor) -> torch.Tensor:
+        """Visit candidate ``choice`` ``(R,)`` of ``view``; returns the clusters visited ``(R,)``."""
+        cluster = view.cluster[self.rows, choice]
+        self.pos = view.entry_xy[self.rows, choice]
+        self.visited = self.visited.clone()
+        self.visited[self.rows, cluster] = True
+        return cluster
+
+
+def frame(starts: int) -> torch.Tensor:
+    """``(starts, 2, 2)`` orthogonal maps: rotations by 2 pi j / starts, odd j also mirrored."""
+    mats = []
+    for j in range(starts):
+        a = 2 * math.pi * j / starts
+        rot = torch.tensor([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+        if j % 2:
+            rot = rot @ torch.tensor([[-1.0, 0.0], [0.0, 1.0]])
+        mats.append(rot)
+    return torch.stack(mats)
+
+
+def turn(v: View | tuple[torch.Tensor, ...], maps: torch.Tensor) -> tuple[torch.Tensor, ...]:
+    """The view's features with every 2-D vector mapped by ``maps`` ``(R, 2, 2)`` (one per row):
+    ``(cand_vec, cand_sc, ctx_vec, ctx_sc)``."""
+    cand_vec, cand_sc, ctx_vec, ctx_sc = ((v.cand_vec, v.cand_sc, v.ctx_vec, v.ctx_sc)
+                                          if isinstance(v, View) else v[:4])
+    m = maps.transpose(1, 2)
+    return (cand_vec @ m[:, None], cand_sc, ctx_vec @ m, ctx_sc)
+
+
+class LocalPolicy(nn.Module):
+    """A transformer over the local view, re-run each step; one score per candidate.
+
+    Parameters
+    ----------
+    dim
+        Token width.
+    n_heads
+        Attention heads.
+    n_layers
+        Transformer layers.
+    ff
+        Feed-forward width.
+    k
+        Candidates in the view.
+    """
+
+    #: Not trained by REINFORCE (no baseline): :mod:`~.imitation` trains it.
+    baselines: tuple[str, ...] = ()
+
+    def __init__(self, dim: int = 64, n_heads: int = 4, n_layers: int = 2, ff: int = 128,
+                 k: int = 16) -> None:
+        super().__init__()
+        self.config: dict[str, Any] = {"model": "local", "dim": dim, "n_heads": n_heads,
+                                       "n_layers": n_layers, "ff": ff, "k": k}
+        self.k = k
+        self.cand = nn.Linear(2 * CAND_VECTORS + CAND_SCALARS, dim)
+        self.ctx = nn.Linear(2 * CTX_VECTORS + CTX_SCALARS, dim)
+        layer = nn.TransformerEncoderLayer(dim, n_heads, ff, dropout=0.0, batch_first=True)
+        self.encoder = nn.TransformerEncoder(layer, n_layers, enable_nested_tensor=False)
+        self.score = nn.Sequential(nn.Linear(2 * dim, dim), nn.ReLU(), nn.Linear(dim, 1))
+
+    def scores(self, cand_vec: torch.Tensor, cand_sc: torch.Tensor, ctx_vec: torch.Tensor,
+               ctx_sc: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+        """Logits ``(R, k)`` of the candidates (-inf where ``mask`` is false)."""
+        r, k = mask.shape
+        tc = self.cand(torch.cat([cand_vec.reshape(r, k, -1), cand_sc], -1))
+        tx = self.ctx(torch.cat([ctx_vec.reshape(r, -1), ctx_sc], -1))[:, None]
+        pad = torch.cat([mask.new_zeros((r, 1)), ~mask], 1)
+        h = self.encoder(torch.cat([tx, tc], 1), src_key_padding_mask=pad)
+        hc, hx = h[:, 1:], h[:, :1].expand(-1, k, -1)
+        logits = self.score(torch.cat([hc, hx], -1)).squeeze(-1)
+        return logits.masked_fill(~mask, -math.inf)
+
+    def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
+               starts: int = 1, flight_per_m: torch.Tensor | None = None,
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Decode ``starts`` tours per instance, each in its own rotated frame (:func:`frame`).
+
+        Returns
+        -------
+        order : torch.Tensor
+            ``(B * starts, K)``: rows ``i * starts ..`` are instance i's tours.
+        logp : torch.Tensor
+            ``(B * starts,)`` log-probability of each tour.
+        """
+        if flight_per_m is None:
+            flight_per_m = _flight_per_m(env)
+        walk = Walk(env, starts, self.k, flight_per_m)
+        maps = frame(starts).repeat(env.shape[0], 1, 1)
+        steps, logp = [], torch.zeros(walk.r)
+        for _ in range(walk.n_clusters):
+            v = walk.view()
+            logits = self.scores(*turn(v, maps), v.mask)
+            lp = torch.log_softmax(logits, -1)
+            if mode == "greedy":
+                choice = logits.argmax(-1)
+            else:
+                choice = torch.multinomial(lp.exp(), 1, generator=generator)[:, 0]
+            logp = logp + lp[walk.rows, choice]
+            steps.append(walk.move(v, choice))
+        return torch.stack(steps, 1), logp
+
+
+def _flight_per_m(env: EnvBatch) -> torch.Tensor:
+    """The UAV's flight energy per metre per instance, from the batch (edge cost / (1 - omega));
+    the default parameters' where omega is 1."""
+    from gtsp_bench.params import EnergyParams
+
+    default = EnergyParams().flight_energy_per_m
+    free = 1.0 - env.omega
+    out = torch.full_like(env.edge_per_m, default)
+    ok = free > 1e-9
+    out[ok] = env.edge_per_m[ok] / free[ok]
+    return out
