@@ -21,7 +21,6 @@ runs it.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections.abc import Sequence
@@ -31,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from gtsp_bench.checks import check_int, parse_ks, parse_omegas
-from gtsp_bench.errors import InputError
+from gtsp_bench.checks import arg_int, check_int, parse_ks, parse_names, parse_omegas
+from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.generator import instance_set
 from gtsp_bench.instance import Instance
 from gtsp_bench.tables import median_wall, write_csv
@@ -125,29 +124,31 @@ def table(results: dict[tuple[str, int], list[tuple[np.ndarray, float]]], solver
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m gtsp_bench.learned_table``."""
-    p = argparse.ArgumentParser(prog="python -m gtsp_bench.learned_table",
+    p = OneLineParser(prog="python -m gtsp_bench.learned_table",
                                 description="learned policies: mean gap and ms per instance, K = 4..200")
     p.add_argument("--solvers", default=",".join(SOLVERS), help="comma-separated registered names")
     p.add_argument("--clusters", "-K", default="4,7,10,20,50,100,200",
                    help=f"K values: {SMALL_KS} use generated sets, {LARGE_KS} the committed ones")
     p.add_argument("--omegas", default="0.3,0.6", help="omega values (default 0.3,0.6)")
-    p.add_argument("--instances", default="100", help="instances per small K (default 100)")
-    p.add_argument("--repeats", default="1", help="batched solves per cell; the median time")
+    p.add_argument("--instances", type=arg_int, default=100, help="instances per small K (default 100)")
+    p.add_argument("--repeats", type=arg_int, default=1, help="batched solves per cell; the median time")
     p.add_argument("--cache", default=str(DEFAULT_CACHE), help="exact optima of the small sets")
     p.add_argument("--instance-dir", default="instances", help="where the committed sets are")
     p.add_argument("--csv", default=str(DEFAULT_CSV), help="CSV of the rows")
     args = p.parse_args(argv)
     try:
-        from gtsp_bench.registry import get_solver
+        from gtsp_bench.registry import get_solver, solver_names
 
-        solvers = tuple(s.strip() for s in args.solvers.split(",") if s.strip())
+        solvers = parse_names(args.solvers, "solver", solver_names())
+        if not solvers:
+            raise InputError("no solver given")
         ks = parse_ks(args.clusters)
         bad = [k for k in ks if k not in SMALL_KS + LARGE_KS]
         if bad:
             raise InputError(f"--clusters: no test set for K = {bad[0]} (valid: {SMALL_KS + LARGE_KS})")
         omegas = parse_omegas(args.omegas)
-        n = check_int("--instances", _int(args.instances), 1)
-        repeats = check_int("--repeats", _int(args.repeats), 1)
+        n = check_int("--instances", args.instances, 1)
+        repeats = check_int("--repeats", args.repeats, 1)
         cells = (small_cells([k for k in ks if k in SMALL_KS], n, omegas, Path(args.cache))
                  + large_cells([k for k in ks if k in LARGE_KS], omegas, Path(args.instance_dir)))
         built = {name: get_solver(name) for name in solvers}
@@ -171,13 +172,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     write_csv(args.csv, COLUMNS, records)
     print(f"rows: {args.csv}", file=sys.stderr)
     return 0
-
-
-def _int(text: str) -> object:
-    try:
-        return int(text)
-    except ValueError:
-        return text
 
 
 if __name__ == "__main__":

@@ -26,7 +26,6 @@ config), ``CKPT.imitation.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``; n
 
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import io
@@ -46,8 +45,8 @@ from gtsp_bench.solvers.learned.env import EnvBatch, env_from_instances, optimal
 from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, turn
 from torch import nn
 
-from gtsp_bench.checks import check_choice, check_float, check_int, check_seed
-from gtsp_bench.errors import InputError
+from gtsp_bench.checks import arg_float, arg_seed, check_choice, check_float, check_int, check_seed
+from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.generator import instance_set
 from gtsp_bench.io import atomic_write_bytes, atomic_write_text
 
@@ -407,11 +406,12 @@ def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m gtsp_bench.solvers.learned.imitation``: train the local-view policy."""
-    p = argparse.ArgumentParser(prog="python -m gtsp_bench.solvers.learned.imitation",
+    p = OneLineParser(prog="python -m gtsp_bench.solvers.learned.imitation",
                                 description="train the local-view policy by imitating lns tours")
     p.add_argument("--recipe", default="local", help=f"one of {', '.join(RECIPES)} (default: local)")
-    p.add_argument("--max-time", type=float, default=None, help="training seconds (default: the recipe's)")
-    p.add_argument("--seed", type=int, default=None, help="seed of the weights and batches")
+    p.add_argument("--max-time", type=arg_float, default=None,
+                   help="training seconds (default: the recipe's)")
+    p.add_argument("--seed", type=arg_seed, default=None, help="seed of the weights and batches")
     p.add_argument("--labels", default=None, help="label cache (default: CKPT.labels.npz)")
     p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     p.add_argument("-o", "--output", required=True, help="policy file to write")
