@@ -42,7 +42,7 @@ def test_local_search_never_worse_and_feasible(seed):
         t = _random_tour(p, rng)
         before = p.tour_cost(t)
         awake = np.ones(p.n_clusters, dtype=bool)
-        cost = kernels.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9, awake)
+        cost = kernels.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9, awake, True)
         assert _feasible(p, t)
         assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
         assert cost <= before + 1e-9
@@ -114,3 +114,56 @@ def test_compiled_equals_python():
     ia = kernels.insert(t[4:], clusters, 0, 0.0, p.edge_cost, p.node_cost, start, near, cluster_of)
     ib = kernels.insert.py_func(t[4:], clusters, 0, 0.0, p.edge_cost, p.node_cost, start, near, cluster_of)
     assert np.array_equal(ia, ib)
+
+
+def _asymmetric_problem(k: int, seed: int):
+    """Arrays of a distance-only asymmetric GTSP: K clusters of 1 to 3 nodes, arcs drawn apart."""
+    rng = np.random.default_rng([seed, 5])
+    sizes = rng.integers(1, 4, size=k)
+    start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    m = int(start[-1])
+    edge = rng.uniform(1.0, 100.0, size=(m, m))
+    np.fill_diagonal(edge, 0.0)
+    cluster_of = np.repeat(np.arange(k), sizes).astype(np.int64)
+    return edge, np.zeros(m), start, cluster_of
+
+
+def _directed_cost(t, edge):
+    return float(sum(edge[t[i], t[(i + 1) % len(t)]] for i in range(len(t))))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_asymmetric_local_search_prices_each_arc_in_its_direction(seed):
+    """Directed costs: the local search (no 2-opt) never raises the directed cost, returns it, and
+    leaves a tour that no single move of a cluster (any place, any head) or re-opt improves."""
+    k = 12
+    edge, node, start, cluster_of = _asymmetric_problem(k, seed)
+    near = kernels.neighbours(edge, start, k - 1)
+    rng = np.random.default_rng(seed)
+    t = np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(k)], dtype=np.int64)
+    before = _directed_cost(t, edge)
+    cost = kernels.local_search(t, edge, node, start, near, cluster_of, 1e-9, np.ones(k, dtype=bool), False)
+    assert len(set(cluster_of[t].tolist())) == k
+    assert cost == pytest.approx(_directed_cost(t, edge), rel=1e-12) and cost <= before + 1e-9
+    for i in range(k):  # every single-cluster move, priced from scratch
+        rest = np.delete(t, i)
+        c = cluster_of[t[i]]
+        for j in range(k - 1):
+            for v in range(start[c], start[c + 1]):
+                assert _directed_cost(np.insert(rest, j + 1, v), edge) >= cost - 1e-9
+    assert kernels.reopt(t.copy(), edge, node, start, cluster_of) >= cost - 1e-9
+
+
+def test_asymmetric_insertion_takes_the_cheapest_directed_place():
+    """One cluster inserted: at the place and head of least c[a, v] + c[v, b] - c[a, b], in
+    direction (its reverse would be priced otherwise)."""
+    k = 9
+    edge, node, start, cluster_of = _asymmetric_problem(k, 1)
+    near = kernels.neighbours(edge, start, k - 1)
+    t = start[:-1].copy()
+    c = 4
+    partial = np.delete(t, c)
+    new = kernels.insert(partial, np.array([c]), 0, 0.0, edge, node, start, near, cluster_of)
+    best = min(_directed_cost(np.insert(partial, j + 1, v), edge)
+               for j in range(k - 1) for v in range(start[c], start[c + 1]))
+    assert _directed_cost(new, edge) == pytest.approx(best, rel=1e-12)

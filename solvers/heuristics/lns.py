@@ -67,7 +67,7 @@ class LnsSettings:
     end_temperature: float = 0.003
     reaction: float = 0.1
     noise: float = 0.1
-    neighbours: int = 10
+    neighbours: int | None = None
     stop_at_convergence: bool = False
 
     def __post_init__(self) -> None:
@@ -87,12 +87,21 @@ class LnsSettings:
             )
         check_float("reaction", self.reaction, 0.0, 1.0)
         check_float("noise", self.noise, 0.0, math.inf, open_low=False)
-        check_int("neighbours", self.neighbours, 1)
+        if self.neighbours is not None:
+            check_int("neighbours", self.neighbours, 1)
         check_bool("stop_at_convergence", self.stop_at_convergence)
 
     def iterations_for(self, n: int) -> int:
         """Iterations per trial for a cycle of ``n`` clusters (default ``max(100, 25 n)``)."""
         return self.iterations if self.iterations is not None else max(100, 25 * n)
+
+    def neighbours_for(self, n: int, symmetric: bool) -> int:
+        """Neighbour-list length for ``n`` clusters (default 10 on symmetric costs; on directed
+        costs every other cluster: there the nearest clusters, by the cheapest arc either way, say
+        little about where a cluster fits)."""
+        if self.neighbours is not None:
+            return self.neighbours
+        return 10 if symmetric else max(1, n - 1)
 
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)``)."""
@@ -113,7 +122,9 @@ class _Search:
                               problem.cluster_of):
             raise ValueError("lns needs nodes numbered cluster by cluster")
         self.cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
-        self.near = kernels.neighbours(self.edge, self.start, settings.neighbours)
+        self.symmetric = bool(problem.symmetric)
+        self.near = kernels.neighbours(self.edge, self.start,
+                                       settings.neighbours_for(problem.n_clusters, self.symmetric))
         n = problem.n_clusters
         self.max_remove = max(1, min(n - 2, settings.max_removals, math.ceil(settings.remove_fraction * n)))
 
@@ -121,7 +132,7 @@ class _Search:
         t = np.array(t, dtype=np.int64)
         tol = REL_TOL * max(1.0, abs(kernels.tour_cost(t, self.edge, self.node)))
         cost = kernels.local_search(t, self.edge, self.node, self.start, self.near, self.cluster_of, tol,
-                                    np.ones(self.p.n_clusters, dtype=np.bool_))
+                                    np.ones(self.p.n_clusters, dtype=np.bool_), self.symmetric)
         return t, cost
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
@@ -156,7 +167,7 @@ class _Search:
                 tick = time.perf_counter()
                 ended = kernels.run_trial(cur, best, costs, counts, weights_r, weights_i, settings,
                                           steps, self.edge, self.node, self.start, self.near,
-                                          self.cluster_of)
+                                          self.cluster_of, self.symmetric)
                 spent = time.perf_counter() - tick
                 if spent < CHUNK_SECONDS / 2 and not ended:
                     steps = min(2 * steps, iterations)
@@ -184,6 +195,10 @@ class _Search:
 class Lns:
     """GLNS-style large neighbourhood search, compiled inner loops (module docstring).
 
+    Asymmetric (directed) costs are priced in their direction: insertion, move and re-opt take
+    each edge from its tail to its head, and the 2-opt (which reverses part of the tour) is left
+    out.
+
     Parameters
     ----------
     iterations
@@ -204,16 +219,19 @@ class Lns:
     noise
         Noisy insertions add up to ``noise`` times the mean edge cost to each price (>= 0).
     neighbours
-        The local search's moves join a cluster only to its ``neighbours`` nearest clusters.
+        The local search's moves join a cluster only to its ``neighbours`` nearest clusters
+        (default 10 on symmetric costs, all clusters on asymmetric ones).
     stop_at_convergence
         Stop after ``trials`` trials instead of going on with more until the time limit.
     """
+
+    asymmetric = True
 
     def __init__(
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
         remove_fraction: float = 0.3, max_removals: int = 100, start_temperature: float = 0.3,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
-        neighbours: int = 10, stop_at_convergence: bool = False,
+        neighbours: int | None = None, stop_at_convergence: bool = False,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,

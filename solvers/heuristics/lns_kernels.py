@@ -1,12 +1,12 @@
 """Compiled inner loops of :mod:`gtsp_bench.solvers.heuristics.lns` (numba, ``cache=True``).
 
 A tour is an ``int64`` array of node ids, one per GTSP cluster, in cycle order. The problem is
-given as ``edge`` (``(m, m)`` symmetric float64), ``node`` (``(m,)``) and ``start`` (``(k + 1,)``:
-the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as :func:`gtsp_bench.problem.price`
-numbers them). One iteration of the search, :func:`iterate`, is one call: remove clusters, insert
-them back, then the local search
+given as ``edge`` (``(m, m)`` float64, ``edge[i, j]`` from i to j), ``node`` (``(m,)``) and
+``start`` (``(k + 1,)``: the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as
+:func:`gtsp_bench.problem.price` numbers them). One iteration of the search, :func:`iterate`, is
+one call: remove clusters, insert them back, then the local search
 
-* **2-opt** on the cycle with the heads kept (first improvement);
+* **2-opt** on the cycle with the heads kept (first improvement; symmetric costs only);
 * **move** (GLNS's "moveopt"): each cluster in turn is taken out and put back at its cheapest
   position and head, when that is cheaper than where it is;
 * **re-opt** (GLNS's "reopt"): optimal heads for the cluster order, a shortest path through the
@@ -380,11 +380,14 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 
 @njit(cache=True)
 def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
-                 near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray) -> float:
+                 near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
+                 symmetric: bool) -> float:
     """2-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost.
 
     ``awake`` marks the clusters to look at first (with their tour neighbours): those just
-    inserted, or all of them.
+    inserted, or all of them. Without ``symmetric`` (directed costs) there is no 2-opt: it reverses
+    part of the tour, priced as if each edge cost the same both ways; move and re-opt price every
+    edge in its direction.
     """
     n = len(t)
     pos = np.empty(n, dtype=np.int64)
@@ -396,7 +399,8 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
             _touch(active, cluster_of, t, i)
     cost = tour_cost(t, edge, node)
     while True:
-        two_opt(t, pos, edge, near, cluster_of, tol, active)
+        if symmetric:
+            two_opt(t, pos, edge, near, cluster_of, tol, active)
         moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active)
         new_cost = tour_cost(t, edge, node)
         if moved and new_cost < cost - tol:
@@ -419,7 +423,7 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
 @njit(cache=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
-            tol: float) -> tuple[np.ndarray, float]:
+            tol: float, symmetric: bool) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
     (waking the inserted clusters)."""
     drop = remove(t, k, removal, edge, node)
@@ -428,7 +432,7 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
     new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
     awake = np.zeros(len(t), dtype=np.bool_)
     awake[clusters] = True
-    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake)
+    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake, symmetric)
     return new, cost
 
 
@@ -455,7 +459,7 @@ def _roulette(w: np.ndarray) -> int:
 def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.ndarray,
               weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray, steps: int,
               edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
-              cluster_of: np.ndarray) -> bool:
+              cluster_of: np.ndarray, symmetric: bool) -> bool:
     """Up to ``steps`` iterations of a trial; whether the trial has ended.
 
     State, updated in place: ``cur`` and ``best`` (tours), ``costs`` = (current, best, trial best),
@@ -477,7 +481,8 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
         level = noise if np.random.random() < 0.5 else 0.0
         cur_cost, best_cost = costs[0], costs[1]
         tol = REL_TOL * max(1.0, abs(cur_cost))
-        new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol)
+        new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol,
+                                symmetric)
         counts[2] += 1
         counts[0] += 1
         if new_cost < best_cost - tol:
@@ -507,14 +512,15 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
 
 
 def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
-    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least distance
-    between any of their nodes), nearest first."""
+    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least edge cost
+    between any of their nodes, in either direction), nearest first."""
     k = len(start) - 1
     count = min(count, k - 1)
     if count <= 0:
         return np.zeros((k, 0), dtype=np.int64)
     by_row = np.minimum.reduceat(edge, start[:-1], axis=0)  # (k, m)
     dist = np.minimum.reduceat(by_row, start[:-1], axis=1)  # (k, k)
+    dist = np.minimum(dist, dist.T)
     np.fill_diagonal(dist, np.inf)
     near = np.argpartition(dist, count - 1, axis=1)[:, :count]
     rows = np.arange(k)[:, None]
@@ -535,11 +541,11 @@ def warm_up() -> None:
     node.setflags(write=False)
     t = np.arange(0, 12, 2, dtype=np.int64)
     for how in range(len(REMOVALS)):
-        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9)
+        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True)
     cur = t.copy()
     run_trial(cur, cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
               np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
-              4, edge, node, start, near, cluster_of)
-    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_))
+              4, edge, node, start, near, cluster_of, True)
+    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
     tour_cost(t, edge, node)
     seed(0)
