@@ -174,9 +174,21 @@ def test_bad_options_rejected(options, message):
         get_solver("lns", **options)
 
 
+def test_time_limited_defaults_cool_each_trial_fully():
+    """Without stop_at_convergence a trial runs all its iterations (no patience) from a hotter
+    start; given values win in both modes."""
+    s = LnsSettings()
+    assert s.patience_for(41) == s.iterations_for(41) == 1025 and s.hottest == 1.0
+    given = LnsSettings(patience=7, start_temperature=0.5)
+    assert given.patience_for(41) == 7 and given.hottest == 0.5
+    with pytest.raises(InputError, match="must not exceed"):
+        LnsSettings(end_temperature=0.5, stop_at_convergence=True)
+
+
 def test_default_budget_scales_with_size():
     """Default iterations per trial and patience grow with the number of clusters."""
-    s = LnsSettings()
+    s = LnsSettings(stop_at_convergence=True)
     assert s.iterations_for(4) == 100 and s.iterations_for(41) == 1025
     assert s.patience_for(4) == 50 and s.patience_for(41) == 205
+    assert s.hottest == 0.3
     assert np.all(np.diff([s.iterations_for(n) for n in range(1, 200)]) >= 0)

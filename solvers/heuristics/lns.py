@@ -15,9 +15,10 @@ weights (each updated with the score of its iterations: new best 3, better than 
 accepted 1, rejected 0). A new tour replaces the current one by simulated-annealing acceptance, the
 temperature cooling geometrically over a trial from ``start_temperature`` to ``end_temperature``
 times the mean edge cost of the tour. A trial ends after ``iterations`` iterations or ``patience``
-without a new trial best; the first trial starts from the greedy tour improved by the local
-search, later ones from the best tour so far, and a trial that did not improve it makes the next
-one hotter (temperatures and noise doubled, up to ``MAX_HEAT`` times).
+without a new trial best (by default only with ``stop_at_convergence``: a search that uses its
+time limit lets each trial cool all the way, from a hotter start); the first trial starts from
+the greedy tour improved by the local search, later ones from the best tour so far, and a trial
+that did not improve it makes the next one hotter (temperatures and noise doubled, up to ``MAX_HEAT`` times).
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -63,7 +64,7 @@ class LnsSettings:
     patience: int | None = None
     remove_fraction: float = 0.3
     max_removals: int = 100
-    start_temperature: float = 0.3
+    start_temperature: float | None = None
     end_temperature: float = 0.003
     reaction: float = 0.1
     noise: float = 0.1
@@ -78,18 +79,27 @@ class LnsSettings:
             check_int("patience", self.patience, 1)
         check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
         check_int("max_removals", self.max_removals, 1)
-        check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
+        check_bool("stop_at_convergence", self.stop_at_convergence)
+        if self.start_temperature is not None:
+            check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
         check_float("end_temperature", self.end_temperature, 0.0, math.inf, open_low=False)
-        if self.end_temperature > self.start_temperature:
+        if self.end_temperature > self.hottest:
             raise InputError(
                 f"end_temperature ({self.end_temperature!r}) must not exceed start_temperature "
-                f"({self.start_temperature!r})"
+                f"({self.hottest!r})"
             )
         check_float("reaction", self.reaction, 0.0, 1.0)
         check_float("noise", self.noise, 0.0, math.inf, open_low=False)
         if self.neighbours is not None:
             check_int("neighbours", self.neighbours, 1)
-        check_bool("stop_at_convergence", self.stop_at_convergence)
+
+    @property
+    def hottest(self) -> float:
+        """The start temperature (default 0.3 with ``stop_at_convergence``, else 1.0: a search that
+        uses its whole time limit can afford to wander further before it cools)."""
+        if self.start_temperature is not None:
+            return self.start_temperature
+        return 0.3 if self.stop_at_convergence else 1.0
 
     def iterations_for(self, n: int) -> int:
         """Iterations per trial for a cycle of ``n`` clusters (default ``max(100, 25 n)``)."""
@@ -104,8 +114,12 @@ class LnsSettings:
         return 10 if symmetric else max(1, n - 1)
 
     def patience_for(self, n: int) -> int:
-        """Iterations without a new trial best that end a trial (default ``max(50, 5 n)``)."""
-        return self.patience if self.patience is not None else max(50, 5 * n)
+        """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
+        ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
+        GTSPLIB's 87-217-cluster instances gave lower gaps within GLNS's budgets)."""
+        if self.patience is not None:
+            return self.patience
+        return max(50, 5 * n) if self.stop_at_convergence else self.iterations_for(n)
 
 
 class _Search:
@@ -155,7 +169,7 @@ class _Search:
                 break
             cur = best.copy()
             mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)])) * heat
-            settings = np.array([iterations, patience, s.start_temperature * mean_edge,
+            settings = np.array([iterations, patience, s.hottest * mean_edge,
                                  s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
                                  s.reaction], dtype=np.float64)
             trial_start = best_cost
@@ -207,13 +221,15 @@ class Lns:
         Trials until the search counts as converged; each restarts the temperature from the best
         tour so far.
     patience
-        Iterations without a new trial best that end a trial (default ``max(50, 5 n)``).
+        Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
+        ``stop_at_convergence``, else none: a trial runs all its iterations).
     remove_fraction
         At most this share of the clusters is removed per iteration, in (0, 1].
     max_removals
         And at most this many clusters (>= 1).
     start_temperature, end_temperature
-        Annealing temperatures as multiples of the tour's mean edge cost (>= 0).
+        Annealing temperatures as multiples of the tour's mean edge cost (>= 0; defaults 0.3 with
+        ``stop_at_convergence``, else 1.0, and 0.003).
     reaction
         Weight of the newest score in an operator's weight, in (0, 1].
     noise
@@ -229,7 +245,7 @@ class Lns:
 
     def __init__(
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
-        remove_fraction: float = 0.3, max_removals: int = 100, start_temperature: float = 0.3,
+        remove_fraction: float = 0.3, max_removals: int = 100, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False,
     ) -> None:
