@@ -167,3 +167,12 @@ def test_asymmetric_insertion_takes_the_cheapest_directed_place():
     best = min(_directed_cost(np.insert(partial, j + 1, v), edge)
                for j in range(k - 1) for v in range(start[c], start[c + 1]))
     assert _directed_cost(new, edge) == pytest.approx(best, rel=1e-12)
+
+
+def test_cluster_distances_are_least_arcs():
+    """Entry (c, d) is the least arc from a node of cluster c to a node of cluster d (directed)."""
+    edge, _, start, _ = _asymmetric_problem(7, 2)
+    dist = kernels.cluster_distances(edge, start)
+    for c in range(7):
+        for d in range(7):
+            assert dist[c, d] == edge[start[c]:start[c + 1], start[d]:start[d + 1]].min()

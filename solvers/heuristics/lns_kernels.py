@@ -511,6 +511,23 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
     return counts[0] >= iterations or counts[1] >= patience
 
 
+@njit(cache=True)
+def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``(k, k)``: the least ``edge[i, j]`` from a node of each cluster to a node of each other
+    (one pass over the matrix, row by row)."""
+    k = len(start) - 1
+    dist = np.full((k, k), np.inf)
+    for c in range(k):
+        for i in range(start[c], start[c + 1]):
+            for d in range(k):
+                low = dist[c, d]
+                for j in range(start[d], start[d + 1]):
+                    if edge[i, j] < low:
+                        low = edge[i, j]
+                dist[c, d] = low
+    return dist
+
+
 def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
     """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least edge cost
     between any of their nodes, in either direction), nearest first."""
@@ -518,8 +535,7 @@ def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
     count = min(count, k - 1)
     if count <= 0:
         return np.zeros((k, 0), dtype=np.int64)
-    by_row = np.minimum.reduceat(edge, start[:-1], axis=0)  # (k, m)
-    dist = np.minimum.reduceat(by_row, start[:-1], axis=1)  # (k, k)
+    dist = cluster_distances(edge, start)
     dist = np.minimum(dist, dist.T)
     np.fill_diagonal(dist, np.inf)
     near = np.argpartition(dist, count - 1, axis=1)[:, :count]
@@ -536,9 +552,9 @@ def warm_up() -> None:
     node = np.zeros(12)
     start = np.arange(0, 13, 2, dtype=np.int64)
     cluster_of = np.repeat(np.arange(6), 2).astype(np.int64)
-    near = neighbours(edge, start, 3)
     edge.setflags(write=False)  # as gtsp_bench.problem.price leaves them: numba types them apart
     node.setflags(write=False)
+    near = neighbours(edge, start, 3)
     t = np.arange(0, 12, 2, dtype=np.int64)
     for how in range(len(REMOVALS)):
         iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True)
