@@ -191,4 +191,6 @@ def test_default_budget_scales_with_size():
     assert s.iterations_for(4) == 100 and s.iterations_for(41) == 1025
     assert s.patience_for(4) == 50 and s.patience_for(41) == 205
     assert s.hottest == 0.3
+    assert s.max_removals_for(400) == 100 and s.max_removals_for(401) == 25
+    assert LnsSettings(max_removals=7).max_removals_for(5000) == 7
     assert np.all(np.diff([s.iterations_for(n) for n in range(1, 200)]) >= 0)

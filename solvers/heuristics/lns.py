@@ -51,6 +51,8 @@ from gtsp_bench.registry import Solution
 REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
 #: A trial that does not improve the best tour doubles the next one's temperatures, up to this factor.
 MAX_HEAT = 8.0
+#: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
+LARGE = 400
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
 
@@ -63,7 +65,7 @@ class LnsSettings:
     trials: int = 3
     patience: int | None = None
     remove_fraction: float = 0.3
-    max_removals: int = 100
+    max_removals: int | None = None
     start_temperature: float | None = None
     end_temperature: float = 0.003
     reaction: float = 0.1
@@ -78,7 +80,8 @@ class LnsSettings:
         if self.patience is not None:
             check_int("patience", self.patience, 1)
         check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
-        check_int("max_removals", self.max_removals, 1)
+        if self.max_removals is not None:
+            check_int("max_removals", self.max_removals, 1)
         check_bool("stop_at_convergence", self.stop_at_convergence)
         if self.start_temperature is not None:
             check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
@@ -113,6 +116,14 @@ class LnsSettings:
             return self.neighbours
         return 10 if symmetric else max(1, n - 1)
 
+    def max_removals_for(self, n: int) -> int:
+        """Most clusters removed in one iteration for ``n`` clusters (default 100 up to
+        ``LARGE`` clusters, 25 above: there an iteration's insertion and local search grow with
+        the removals, and many small iterations did better in a fixed time)."""
+        if self.max_removals is not None:
+            return self.max_removals
+        return 100 if n <= LARGE else 25
+
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
         ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
@@ -140,7 +151,8 @@ class _Search:
         self.near = kernels.neighbours(self.edge, self.start,
                                        settings.neighbours_for(problem.n_clusters, self.symmetric))
         n = problem.n_clusters
-        self.max_remove = max(1, min(n - 2, settings.max_removals, math.ceil(settings.remove_fraction * n)))
+        self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
+                                     math.ceil(settings.remove_fraction * n)))
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
@@ -226,7 +238,7 @@ class Lns:
     remove_fraction
         At most this share of the clusters is removed per iteration, in (0, 1].
     max_removals
-        And at most this many clusters (>= 1).
+        And at most this many clusters (>= 1; default 100, or 25 above ``LARGE`` clusters).
     start_temperature, end_temperature
         Annealing temperatures as multiples of the tour's mean edge cost (>= 0; defaults 0.3 with
         ``stop_at_convergence``, else 1.0, and 0.003).
@@ -245,7 +257,7 @@ class Lns:
 
     def __init__(
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
-        remove_fraction: float = 0.3, max_removals: int = 100, start_temperature: float | None = None,
+        remove_fraction: float = 0.3, max_removals: int | None = None, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False,
     ) -> None:
