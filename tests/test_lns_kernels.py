@@ -135,7 +135,8 @@ def _directed_cost(t, edge):
 @pytest.mark.parametrize("seed", range(3))
 def test_asymmetric_local_search_prices_each_arc_in_its_direction(seed):
     """Directed costs: the local search (no 2-opt) never raises the directed cost, returns it, and
-    leaves a tour that no single move of a cluster (any place, any head) or re-opt improves."""
+    leaves a tour that no single move of a cluster (any place, any head), re-opt or or-opt move
+    of a run of 2-3 clusters improves."""
     k = 12
     edge, node, start, cluster_of = _asymmetric_problem(k, seed)
     near = kernels.neighbours(edge, start, k - 1)
@@ -152,6 +153,13 @@ def test_asymmetric_local_search_prices_each_arc_in_its_direction(seed):
             for v in range(start[c], start[c + 1]):
                 assert _directed_cost(np.insert(rest, j + 1, v), edge) >= cost - 1e-9
     assert kernels.reopt(t.copy(), edge, node, start, cluster_of) >= cost - 1e-9
+    for length in (2, 3):  # every or-opt move of a run, direction kept, priced from scratch
+        for i in range(k):
+            rolled = np.roll(t, -i)
+            run, rest = rolled[:length], rolled[length:]
+            for j in range(len(rest)):
+                moved = np.concatenate([rest[:j + 1], run, rest[j + 1:]])
+                assert _directed_cost(moved, edge) >= cost - 1e-9
 
 
 def test_asymmetric_insertion_takes_the_cheapest_directed_place():
@@ -176,3 +184,25 @@ def test_cluster_distances_are_least_arcs():
     for c in range(7):
         for d in range(7):
             assert dist[c, d] == edge[start[c]:start[c + 1], start[d]:start[d + 1]].min()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_or_opt_never_worse_and_feasible(seed):
+    """Or-opt alone on random tours: one node per cluster, heads kept, the cost only falls, and
+    it does fall on some of them."""
+    p, start, cluster_of = _problem(15, 3, seed)
+    near = kernels.neighbours(p.edge_cost, start, 6)
+    rng = np.random.default_rng(seed)
+    gained = 0
+    for _ in range(4):
+        t = _random_tour(p, rng)
+        pos = np.empty(len(t), dtype=np.int64)
+        pos[cluster_of[t]] = np.arange(len(t))
+        before, heads = p.tour_cost(t), set(t.tolist())
+        moved = kernels.or_opt(t, pos, p.edge_cost, near, cluster_of, 1e-9, np.ones((3, len(t)), dtype=bool))
+        assert _feasible(p, t) and set(t.tolist()) == heads
+        assert np.array_equal(pos[cluster_of[t]], np.arange(len(t)))
+        assert p.tour_cost(t) <= before + 1e-9
+        assert moved == (p.tour_cost(t) < before - 1e-9)
+        gained += moved
+    assert gained > 0
