@@ -9,16 +9,17 @@ Each iteration removes some clusters from the current tour and puts them back:
   or a **randomised** pick, each at its cheapest edge and head; every other iteration adds noise (up to
   ``noise`` times the mean edge cost) to the prices;
 
-then a local search (:mod:`gtsp_bench.solvers.heuristics.lns_kernels`: 2-opt, GLNS's "moveopt" and
-"reopt"). The inner loops are compiled with numba. The operators are drawn by roulette on adaptive
-weights (each updated with the score of its iterations: new best 3, better than the current 2,
-accepted 1, rejected 0). A new tour replaces the current one by simulated-annealing acceptance, the
-temperature cooling geometrically over a trial from ``start_temperature`` to ``end_temperature``
-times the mean edge cost of the tour. A trial ends after ``iterations`` iterations or ``patience``
-without a new trial best (by default only with ``stop_at_convergence``: a search that uses its
-time limit lets each trial cool all the way, from a hotter start); the first trial starts from
-the greedy tour improved by the local search, later ones from the best tour so far, and a trial
-that did not improve it makes the next one hotter (temperatures and noise doubled, up to ``MAX_HEAT`` times).
+then a local search (:mod:`gtsp_bench.solvers.heuristics.lns_local`: 2-opt, or-opt of 2-3 cluster
+runs, GLNS's "moveopt" and "reopt"). The inner loops are compiled with numba. The operators are
+drawn by roulette on adaptive weights (each updated with the score of its iterations: new best 3,
+better than the current 2, accepted 1, rejected 0). A new tour replaces the current one by
+simulated-annealing acceptance, the temperature cooling geometrically over a trial from
+``start_temperature`` to ``end_temperature`` times the mean edge cost of the tour. A trial ends
+after ``iterations`` iterations or ``patience`` without a new trial best (by default only with
+``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
+hotter start); the first trial starts from the greedy tour improved by the local search, later ones
+from the best tour so far, and a trial that did not improve it makes the next one hotter
+(temperatures and noise doubled, up to ``MAX_HEAT`` times).
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
