@@ -11,7 +11,8 @@ seconds each (60 by default), the gap to GLKH's best known tour.
 
 Run from the repository root, e.g. ``.venv/bin/python benchmarks/glns.py --seeds 3 --jobs 2``;
 ``--first-seed 4 --seeds 3 --with benchmarks/out/glns.csv --out other.csv`` adds seeds 4-6 to an
-earlier run's summary (``make bench-glns``). The first run on a machine compiles the numba kernels (about a minute).
+earlier run's summary (``make bench-glns``). The first run on a machine compiles the numba kernels
+(about a minute).
 """
 
 from __future__ import annotations
