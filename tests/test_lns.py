@@ -167,6 +167,7 @@ def test_operators_are_all_used():
     ({"neighbours": 0}, "neighbours"),
     ({"max_removals": 0}, "max_removals must be an integer >= 1"),
     ({"stop_at_convergence": "yes"}, "stop_at_convergence must be true or false"),
+    ({"restart_after": -1}, "restart_after must be an integer >= 0"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -183,6 +184,25 @@ def test_time_limited_defaults_cool_each_trial_fully():
     assert given.patience_for(41) == 7 and given.hottest == 0.5
     with pytest.raises(InputError, match="must not exceed"):
         LnsSettings(end_temperature=0.5, stop_at_convergence=True)
+
+
+def test_cold_restarts_leave_converging_runs_alone():
+    """restart_after acts only on a search that uses its time limit: with stop_at_convergence the
+    run is the same whatever its value (the paper's runs keep their answers)."""
+    inst = generate_instance(14, 4, seed=2)
+    runs = [run_solver(get_solver("lns", restart_after=r, **CONVERGE), inst, 0.4, seed=1)
+            for r in (0, 1, 2)]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+def test_cold_restarts_under_a_time_limit():
+    """With tiny trials and restart_after=1 a time-limited run makes many trials, cold ones among
+    them, and still returns a tour no better than the DP optimum, at it here."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", iterations=20, restart_after=1), inst, 0.5, seed=2, time_limit=0.5)
+    assert r.stats["trials"] > 3
+    assert r.objective == pytest.approx(optimum, rel=1e-9)
 
 
 def test_default_budget_scales_with_size():

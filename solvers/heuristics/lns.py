@@ -23,8 +23,10 @@ from the best tour so far, and a trial that did not improve it makes the next on
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
-stop there. A run that converges is reproducible for a seed; one cut by the time limit before it
-converged has status ``time_limit``.
+stop there. Such a search also restarts cold (GLNS's cold trials): after ``restart_after`` trials
+in a row that did not improve the tour they started from, the next starts from a fresh
+random-insertion tour, and the trials after it from that run's best. A run that converges is
+reproducible for a seed; one cut by the time limit before it converged has status ``time_limit``.
 """
 
 from __future__ import annotations
@@ -73,6 +75,7 @@ class LnsSettings:
     noise: float = 0.1
     neighbours: int | None = None
     stop_at_convergence: bool = False
+    restart_after: int = 2
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -96,6 +99,7 @@ class LnsSettings:
         check_float("noise", self.noise, 0.0, math.inf, open_low=False)
         if self.neighbours is not None:
             check_int("neighbours", self.neighbours, 1)
+        check_int("restart_after", self.restart_after, 0)
 
     @property
     def hottest(self) -> float:
@@ -176,25 +180,33 @@ class _Search:
         timed_out = False
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         steps, heat = 1, 1.0
+        # Trials restart from the base: the best tour, or after a cold restart that run's best.
+        base, base_cost, fails = best.copy(), best_cost, 0
+        cold = s.restart_after > 0 and not s.stop_at_convergence and deadline is not None
         while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
                 break
-            cur = best.copy()
+            if cold and fails >= s.restart_after:
+                base, base_cost = self.local_search(kernels.random_insertion_tour(
+                    self.edge, self.node, self.start, self.near, self.cluster_of))
+                heat, fails = 1.0, 0
+                if base_cost < best_cost - REL_TOL * abs(best_cost):
+                    best, best_cost = base.copy(), base_cost
+            cur, trial_best = base.copy(), base.copy()
             mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)])) * heat
             settings = np.array([iterations, patience, s.hottest * mean_edge,
                                  s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
                                  s.reaction], dtype=np.float64)
-            trial_start = best_cost
-            costs = np.array([best_cost, best_cost, best_cost])
+            costs = np.array([base_cost, best_cost, base_cost])
             counts = np.array([0, 0, done, best_at], dtype=np.int64)
             while True:
                 if deadline is None:
                     steps = iterations
                 tick = time.perf_counter()
-                ended = kernels.run_trial(cur, best, costs, counts, weights_r, weights_i, settings,
-                                          steps, self.edge, self.node, self.start, self.near,
-                                          self.cluster_of, self.symmetric)
+                ended = kernels.run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i,
+                                          settings, steps, self.edge, self.node, self.start,
+                                          self.near, self.cluster_of, self.symmetric)
                 spent = time.perf_counter() - tick
                 if spent < CHUNK_SECONDS / 2 and not ended:
                     steps = min(2 * steps, iterations)
@@ -209,8 +221,12 @@ class _Search:
             if timed_out:
                 break
             trials += 1
-            # A trial that did not improve the best tour: the next one starts hotter.
-            heat = 1.0 if best_cost < trial_start - REL_TOL * abs(trial_start) else min(MAX_HEAT, 2 * heat)
+            # A trial that did not improve its base: the next one starts hotter (and after
+            # restart_after of them, from a fresh tour).
+            if costs[2] < base_cost - REL_TOL * abs(base_cost):
+                base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
+            else:
+                heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
             converged = converged or trials >= s.trials
         weights = dict(zip(REMOVALS, weights_r, strict=True))
         weights.update(zip(INSERTIONS, weights_i, strict=True))
@@ -252,6 +268,10 @@ class Lns:
         (default 10 on symmetric costs, all clusters on asymmetric ones).
     stop_at_convergence
         Stop after ``trials`` trials instead of going on with more until the time limit.
+    restart_after
+        Without ``stop_at_convergence``, after this many trials in a row that did not improve
+        the tour they started from, the next starts from a fresh random-insertion tour (GLNS's
+        cold restart; later trials start from that run's best). 0: never.
     """
 
     asymmetric = True
@@ -260,11 +280,11 @@ class Lns:
         self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
         remove_fraction: float = 0.3, max_removals: int | None = None, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
-        neighbours: int | None = None, stop_at_convergence: bool = False,
+        neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
-                                    neighbours, stop_at_convergence)
+                                    neighbours, stop_at_convergence, restart_after)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

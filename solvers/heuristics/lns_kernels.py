@@ -211,13 +211,14 @@ def _roulette(w: np.ndarray) -> int:
 
 
 @njit(cache=True)
-def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.ndarray,
-              weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray, steps: int,
-              edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
+def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: np.ndarray,
+              counts: np.ndarray, weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray,
+              steps: int, edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
               cluster_of: np.ndarray, symmetric: bool) -> bool:
     """Up to ``steps`` iterations of a trial; whether the trial has ended.
 
-    State, updated in place: ``cur`` and ``best`` (tours), ``costs`` = (current, best, trial best),
+    State, updated in place: ``cur``, ``best`` and ``trial_best`` (tours), ``costs`` = (current,
+    best, trial best),
     ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
     iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
     temperature, end temperature, largest removal, noise, reaction), temperatures and noise in
@@ -257,6 +258,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
             costs[1] = new_cost
             counts[3] = counts[2]
         if new_cost < costs[2] - tol:
+            trial_best[:] = new
             costs[2] = new_cost
             counts[1] = 0
         else:
@@ -264,6 +266,18 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
         weights_r[r_op] = max(MIN_WEIGHT, (1.0 - reaction) * weights_r[r_op] + reaction * score)
         weights_i[i_op] = max(MIN_WEIGHT, (1.0 - reaction) * weights_i[i_op] + reaction * score)
     return counts[0] >= iterations or counts[1] >= patience
+
+
+@njit(cache=True)
+def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
+                          cluster_of: np.ndarray) -> np.ndarray:
+    """A fresh tour (GLNS's cold start): a random node of a random cluster, then the other
+    clusters in random order, each at its cheapest place and head."""
+    k = len(start) - 1
+    order = np.random.permutation(k)
+    first = np.empty(1, dtype=np.int64)
+    first[0] = np.random.randint(start[order[0]], start[order[0] + 1])
+    return insert(first, order[1:].astype(np.int64), 2, 0.0, edge, node, start, near, cluster_of)
 
 
 @njit(cache=True)
@@ -314,9 +328,10 @@ def warm_up() -> None:
     for how in range(len(REMOVALS)):
         iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True)
     cur = t.copy()
-    run_trial(cur, cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
+    run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
               np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
               4, edge, node, start, near, cluster_of, True)
     local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
     tour_cost(t, edge, node)
+    random_insertion_tour(edge, node, start, near, cluster_of)
     seed(0)
