@@ -1,6 +1,7 @@
 """lns against GLNS on GTSPLIB: per-instance gaps, hits and worst runs next to GLNS's.
 
-Default mode: the 45 instances of ``instances/gtsplib/glns-45.csv`` (31-217 clusters), each run
+Default mode: the 45 instances of ``instances/gtsplib/glns-45.csv`` (31-217 clusters, 5 of them
+asymmetric), each run
 ``--seeds`` times with a budget of ``--factor`` times GLNS's (Julia) mean seconds there; prints a
 table beside GLNS's numbers and the three target lines (mean gap, instances whose best known was
 hit at least once, worst run), and writes one CSV row per run.
@@ -8,8 +9,10 @@ hit at least once, worst run), and writes one CSV row per run.
 ``--large``: the symmetric GTSPLIB instances of 1,000 to 15,112 nodes (or ``--names``), ``--time``
 seconds each (60 by default), the gap to GLKH's best known tour.
 
-Run from the repository root, e.g. ``.venv/bin/python benchmarks/glns.py --seeds 3 --jobs 2``
-(``make bench-glns``). The first run on a machine compiles the numba kernels (about a minute).
+Run from the repository root, e.g. ``.venv/bin/python benchmarks/glns.py --seeds 3 --jobs 2``;
+``--first-seed 4 --seeds 3 --with benchmarks/out/glns.csv --out other.csv`` adds seeds 4-6 to an
+earlier run's summary (``make bench-glns``). The first run on a machine compiles the numba kernels
+(about a minute).
 """
 
 from __future__ import annotations
@@ -60,11 +63,11 @@ def solve(task: tuple[str, int, float, dict]) -> dict[str, object]:
     name, seed, budget, options = task
     inst = gtsplib.read(name)
     best = gtsplib.best_known()[name].value
-    t0 = time.perf_counter()
-    r = run_solver(get_solver("lns", **options), inst, None, seed=seed, time_limit=budget)
+    solver = get_solver("lns", **options)  # loads the compiled kernels: not part of the budget
+    r = run_solver(solver, inst, None, seed=seed, time_limit=budget)
     return {"instance": name, "seed": seed, "budget_s": round(budget, 3), "objective": r.objective,
             "best_known": best, "gap_pct": 100.0 * (r.objective - best) / best,
-            "runtime_s": round(time.perf_counter() - t0, 3), "status": r.status,
+            "runtime_s": round(r.runtime_s, 3), "status": r.status,
             "iterations": r.stats.get("iterations"), "trials": r.stats.get("trials")}
 
 
@@ -119,6 +122,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--factor", type=float, default=2.0,
                    help="budget = FACTOR x GLNS's mean seconds on the instance (default 2)")
     p.add_argument("--seeds", type=int, default=10, help="seeds 1..SEEDS per instance (default 10)")
+    p.add_argument("--first-seed", type=int, default=1,
+                   help="start the seeds here: FIRST..FIRST+SEEDS-1 (default 1)")
+    p.add_argument("--with", dest="earlier", action="append", type=Path, default=[], metavar="CSV",
+                   help="rows of an earlier run (e.g. other seeds) to summarise with this one's")
     p.add_argument("--names", help="comma-separated instance names (default: all of the mode)")
     p.add_argument("--jobs", type=int, default=1, help="parallel worker processes (default 1)")
     p.add_argument("--large", action="store_true",
@@ -128,26 +135,28 @@ def main(argv: list[str] | None = None) -> int:
                    metavar="KEY=VALUE", help="an lns option (repeatable), e.g. --set remove_fraction=0.2")
     p.add_argument("--out", type=Path, help="CSV of the runs (default benchmarks/out/glns[-large].csv)")
     args = p.parse_args(argv)
-    if args.seeds < 1 or args.jobs < 1 or args.factor <= 0 or args.time <= 0:
-        p.error("--seeds and --jobs must be >= 1, --factor and --time > 0")
+    if args.seeds < 1 or args.jobs < 1 or args.first_seed < 0 or args.factor <= 0 or args.time <= 0:
+        p.error("--seeds and --jobs must be >= 1, --first-seed >= 0, --factor and --time > 0")
+    earlier: list[dict[str, object]] = []
+    for path in args.earlier:
+        try:
+            with open(path, newline="") as f:
+                earlier += list(csv.DictReader(f))
+        except OSError as e:
+            p.error(f"{path}: {e.strerror}")
     glns = None if args.large else glns_rows()
     known = gtsplib.best_known()
     names = args.names.split(",") if args.names else (large_names() if args.large else list(glns))
     for name in names:
         if name not in known or (glns is not None and name not in glns):
             p.error(f"unknown instance {name!r}" + ("" if args.large else " (not in glns-45.csv)"))
-    skipped = [n for n in names if known[n].type != "GTSP"]
-    if skipped and args.names:
-        p.error(f"lns is for symmetric instances; asymmetric: {', '.join(skipped)}")
-    if skipped:
-        print(f"skipped (asymmetric, lns is symmetric-only): {', '.join(skipped)}", file=sys.stderr)
-        names = [n for n in names if n not in skipped]
     options = dict(args.options)
     get_solver("lns", **options)  # bad options fail here, once
     tasks = []
     for name in names:
         budget = args.time if args.large else args.factor * float(glns[name]["glns_julia_mean_s"])
-        tasks += [(name, seed, budget, options) for seed in range(1, args.seeds + 1)]
+        tasks += [(name, seed, budget, options)
+                  for seed in range(args.first_seed, args.first_seed + args.seeds)]
     out = args.out or Path("benchmarks/out") / ("glns-large.csv" if args.large else "glns.csv")
     rows: list[dict[str, object]] = []
     t0 = time.perf_counter()
@@ -157,9 +166,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{row['instance']:<12} seed {row['seed']:>2} gap {float(row['gap_pct']):7.3f} % "
                   f"({row['iterations']} iterations, {row['runtime_s']} s)", file=sys.stderr, flush=True)
             write_csv(rows, out)
-    print("\n".join(summarise(rows, names, glns, args.seeds)))
-    if skipped:
-        print(f"skipped {len(skipped)} asymmetric instances: {', '.join(skipped)}")
+    both = earlier + rows
+    runs = max((sum(r["instance"] == n for r in both) for n in names), default=0)
+    print("\n".join(summarise(both, names, glns, runs)))
     print(f"{len(rows)} runs in {time.perf_counter() - t0:.0f} s, rows in {out}")
     return 0
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics.lns import LnsSettings
 
+from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
@@ -16,7 +17,7 @@ from gtsp_bench.io import read_instance
 from gtsp_bench.registry import get_solver, run_solver
 
 from .conftest import GTSPLIB
-from .tiny_cases import tiny_case
+from .tiny_cases import tiny_asymmetric_case, tiny_case
 
 #: lns that stops when its trials are done instead of using the whole time limit.
 CONVERGE = {"stop_at_convergence": True}
@@ -50,6 +51,42 @@ def test_never_below_dp_optimum(seed):
     r = run_solver(get_solver("lns", **CONVERGE), inst, 0.4, seed=seed)
     assert r.objective >= optimum - 1e-9 * optimum
     assert r.objective == pytest.approx(optimum, rel=1e-9)
+
+
+def _asymmetric(k: int, seed: int) -> Instance:
+    """A distance-only asymmetric GTSP: K clusters of 2 or 3 nodes, arc costs drawn
+    independently in each direction."""
+    rng = np.random.default_rng([seed, 11])
+    sizes = rng.integers(2, 4, size=k)
+    n = int(sizes.sum())
+    w = np.round(rng.uniform(1.0, 100.0, size=(n, n)), 2)
+    np.fill_diagonal(w, 0.0)
+    return Instance(name=f"asym-{k}-{seed}", clusters=tuple(np.full((s, 2), np.nan) for s in sizes),
+                    params=None, edge_weight_type="EXPLICIT", weights=w, symmetric=False)
+
+
+def test_asymmetric_tiny_instances_match_brute():
+    """Directed costs: never below brute force's optimum, at it on most tiny instances (the
+    evaluator re-prices every answer in its direction)."""
+    hits = 0
+    for seed in range(10):
+        inst, optimum = tiny_asymmetric_case(seed)
+        r = run_solver(get_solver("lns", **CONVERGE), inst, None, seed=seed)
+        assert r.objective >= optimum - 1e-9 * optimum
+        hits += r.objective <= optimum + 1e-9 * optimum
+    assert hits >= 8
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_asymmetric_reaches_dp_optimum(seed):
+    """K = 9 asymmetric instances: lns reaches dp's proven optimum, whose reverse tour
+    costs more (the direction matters)."""
+    inst = _asymmetric(9, seed)
+    best = run_solver("dp", inst, None)
+    r = run_solver(get_solver("lns", **CONVERGE), inst, None, seed=seed)
+    assert r.objective == pytest.approx(best.objective, rel=1e-9)
+    back = evaluate(inst, None, r.order[::-1], r.heads).objective
+    assert back > r.objective + 1e-9
 
 
 def test_stop_at_convergence_stops_after_its_trials():
@@ -130,6 +167,7 @@ def test_operators_are_all_used():
     ({"neighbours": 0}, "neighbours"),
     ({"max_removals": 0}, "max_removals must be an integer >= 1"),
     ({"stop_at_convergence": "yes"}, "stop_at_convergence must be true or false"),
+    ({"restart_after": -1}, "restart_after must be an integer >= 0"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -137,9 +175,42 @@ def test_bad_options_rejected(options, message):
         get_solver("lns", **options)
 
 
+def test_time_limited_defaults_cool_each_trial_fully():
+    """Without stop_at_convergence a trial runs all its iterations (no patience) from a hotter
+    start; given values win in both modes."""
+    s = LnsSettings()
+    assert s.patience_for(41) == s.iterations_for(41) == 1025 and s.hottest == 1.0
+    given = LnsSettings(patience=7, start_temperature=0.5)
+    assert given.patience_for(41) == 7 and given.hottest == 0.5
+    with pytest.raises(InputError, match="must not exceed"):
+        LnsSettings(end_temperature=0.5, stop_at_convergence=True)
+
+
+def test_cold_restarts_leave_converging_runs_alone():
+    """restart_after acts only on a search that uses its time limit: with stop_at_convergence the
+    run is the same whatever its value (the paper's runs keep their answers)."""
+    inst = generate_instance(14, 4, seed=2)
+    runs = [run_solver(get_solver("lns", restart_after=r, **CONVERGE), inst, 0.4, seed=1)
+            for r in (0, 1, 2)]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+def test_cold_restarts_under_a_time_limit():
+    """With tiny trials and restart_after=1 a time-limited run makes many trials, cold ones among
+    them, and still returns a tour no better than the DP optimum, at it here."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", iterations=20, restart_after=1), inst, 0.5, seed=2, time_limit=0.5)
+    assert r.stats["trials"] > 3
+    assert r.objective == pytest.approx(optimum, rel=1e-9)
+
+
 def test_default_budget_scales_with_size():
     """Default iterations per trial and patience grow with the number of clusters."""
-    s = LnsSettings()
+    s = LnsSettings(stop_at_convergence=True)
     assert s.iterations_for(4) == 100 and s.iterations_for(41) == 1025
     assert s.patience_for(4) == 50 and s.patience_for(41) == 205
+    assert s.hottest == 0.3
+    assert s.max_removals_for(400) == 100 and s.max_removals_for(401) == 25
+    assert LnsSettings(max_removals=7).max_removals_for(5000) == 7
     assert np.all(np.diff([s.iterations_for(n) for n in range(1, 200)]) >= 0)

@@ -215,7 +215,7 @@ def test_broken_plugin_by_name_is_an_input_error(monkeypatch):
 
 # ---------------------------------------------------------------------- asymmetric costs
 #: The built-in solvers that declare ``asymmetric = True``.
-ASYMMETRIC_SOLVERS = {"brute", "dp", "greedy", "aco", "pyvrp", "ortools", "lkh"}
+ASYMMETRIC_SOLVERS = {"brute", "dp", "greedy", "aco", "lns", "pyvrp", "ortools", "lkh"}
 REFUSAL = "handles symmetric costs only (this instance is asymmetric)"
 
 
@@ -246,7 +246,7 @@ def get_spec_class(name):
     return _registry()[name].load()
 
 
-@pytest.mark.parametrize("name", ["milp", "gurobi", "greedy+ls", "aco+ls", "lns", "drl", "am"])
+@pytest.mark.parametrize("name", ["milp", "gurobi", "greedy+ls", "aco+ls", "drl", "am"])
 def test_symmetric_only_solvers_refuse_asymmetric_instances(name):
     """One InputError line naming the solver, before it runs (the CLI adds the file)."""
     inst, _ = tiny_asymmetric_case(0)

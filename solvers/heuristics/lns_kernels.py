@@ -1,25 +1,27 @@
 """Compiled inner loops of :mod:`gtsp_bench.solvers.heuristics.lns` (numba, ``cache=True``).
 
 A tour is an ``int64`` array of node ids, one per GTSP cluster, in cycle order. The problem is
-given as ``edge`` (``(m, m)`` symmetric float64), ``node`` (``(m,)``) and ``start`` (``(k + 1,)``:
-the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as :func:`gtsp_bench.problem.price`
-numbers them). One iteration of the search, :func:`iterate`, is one call: remove clusters, insert
-them back, then the local search
-
-* **2-opt** on the cycle with the heads kept (first improvement);
-* **move** (GLNS's "moveopt"): each cluster in turn is taken out and put back at its cheapest
-  position and head, when that is cheaper than where it is;
-* **re-opt** (GLNS's "reopt"): optimal heads for the cluster order, a shortest path through the
-  layers from each node of the smallest cluster;
-
-repeated until none of the three improves. Random numbers come from numba's own generator, seeded
-by :func:`seed` (with ``NUMBA_DISABLE_JIT=1`` the same code runs as plain Python on numpy's
-global generator: same answers, much slower).
+given as ``edge`` (``(m, m)`` float64, ``edge[i, j]`` from i to j), ``node`` (``(m,)``) and
+``start`` (``(k + 1,)``: the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as
+:func:`gtsp_bench.problem.price` numbers them). One iteration of the search, :func:`iterate`, is
+one call: remove clusters, insert them back, then the local search of
+:mod:`gtsp_bench.solvers.heuristics.lns_local` (2-opt, or-opt, GLNS's "moveopt" and "reopt").
+Random numbers come from numba's own generator, seeded by :func:`seed` (with
+``NUMBA_DISABLE_JIT=1`` the same code runs as plain Python on numpy's global generator: same
+answers, much slower).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported for callers)
+    local_search,
+    move_opt,
+    or_opt,
+    reopt,
+    tour_cost,
+    two_opt,
+)
 from numba import njit
 
 #: Removal operators, by index.
@@ -32,16 +34,6 @@ INSERTIONS = ("cheapest", "farthest", "randomised")
 def seed(value: int) -> None:
     """Seed the generator the kernels draw from."""
     np.random.seed(value)
-
-
-@njit(cache=True)
-def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
-    """Node costs plus edge costs of the closed tour ``t``."""
-    n = len(t)
-    total = 0.0
-    for i in range(n):
-        total += node[t[i]] + edge[t[i], t[(i + 1) % n]]
-    return total
 
 
 # ---------------------------------------------------------------------- removal
@@ -183,243 +175,10 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
     return out
 
 
-# ---------------------------------------------------------------------- local search
-@njit(cache=True)
-def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi: int) -> None:
-    """Reverse the cyclic run of positions ``lo .. hi`` (or, the same cycle, its complement when
-    that is shorter), keeping ``pos`` (the position of each cluster) in step."""
-    n = len(t)
-    length = (hi - lo) % n + 1
-    if 2 * length > n:
-        lo, hi, length = (hi + 1) % n, (lo - 1) % n, n - length
-    for x in range(length // 2):
-        p, q = (lo + x) % n, (hi - x) % n
-        t[p], t[q] = t[q], t[p]
-        pos[cluster_of[t[p]]] = p
-        pos[cluster_of[t[q]]] = q
-
-
-@njit(cache=True)
-def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) -> None:
-    """Wake (both don't-look bits of) the cluster at position ``i`` and its two tour neighbours."""
-    n = len(t)
-    for q in (i - 1, i, i + 1):
-        c = cluster_of[t[q % n]]
-        active[0, c] = True
-        active[1, c] = True
-
-
-@njit(cache=True)
-def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
-            cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
-    """2-opt with fixed heads over neighbour lists and don't-look bits, first improvement, in place.
-
-    For each awake head ``a`` (``active[0]`` of its cluster) and each cluster ``c`` in
-    ``near[cluster of a]``, the two exchanges that make ``a`` adjacent to ``c``'s head are tried; a
-    head where none improves goes to sleep, the ends of a changed edge wake. Returns whether
-    anything improved.
-    """
-    n = len(t)
-    if n < 5:
-        return False
-    any_gain = False
-    improved = True
-    while improved:
-        improved = False
-        for i in range(n):
-            if not active[0, cluster_of[t[i]]]:
-                continue
-            found = False
-            for w in range(near.shape[1]):
-                a, b, p = t[i], t[(i + 1) % n], t[(i - 1) % n]
-                j = pos[near[cluster_of[a], w]]
-                c, d, e = t[j], t[(j + 1) % n], t[(j - 1) % n]
-                if c != b and d != a:  # a -> c ... b -> d: reverse i + 1 .. j
-                    delta = edge[a, c] + edge[b, d] - edge[a, b] - edge[c, d]
-                    if delta < -tol:
-                        _reverse(t, pos, cluster_of, (i + 1) % n, j)
-                        for x in (a, b, c, d):
-                            _touch(active, cluster_of, t, pos[cluster_of[x]])
-                        improved = found = True
-                        continue
-                if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
-                    delta = edge[a, c] + edge[p, e] - edge[p, a] - edge[e, c]
-                    if delta < -tol:
-                        _reverse(t, pos, cluster_of, i, (j - 1) % n)
-                        for x in (a, p, c, e):
-                            _touch(active, cluster_of, t, pos[cluster_of[x]])
-                        improved = found = True
-            if found:
-                any_gain = True
-            else:
-                active[0, cluster_of[t[i]]] = False
-    return any_gain
-
-
-@njit(cache=True)
-def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
-             start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
-             active: np.ndarray) -> bool:
-    """Each awake cluster (``active[1]``) in turn to its cheapest place and head (GLNS's
-    moveopt), in place.
-
-    The places tried are its own and the edges on either side of the heads of its neighbour
-    clusters ``near[c]``. A cluster that stays goes to sleep; one that moves wakes its old and new
-    neighbours. Returns whether anything improved.
-    """
-    n = len(t)
-    if n < 3:
-        return False
-    any_gain = False
-    for c in np.random.permutation(n):
-        if not active[1, c]:
-            continue
-        i = pos[c]
-        u = t[i]
-        a, b = t[(i - 1) % n], t[(i + 1) % n]
-        base = -edge[a, b]
-        saving = edge[a, u] + node[u] + edge[u, b] + base  # what taking u out saves
-        best, best_j, best_v = saving - tol, -1, -1
-        for v in range(start[c], start[c + 1]):  # the same place with another head
-            d = base + edge[a, v] + edge[v, b] + node[v]
-            if d < best:
-                best, best_j, best_v = d, -2, v
-        for w in range(near.shape[1]):
-            j0 = pos[near[c, w]]
-            for j in ((j0 - 1) % n, j0):  # the edge t[j] -> t[j + 1]
-                if j == i or (j + 1) % n == i:
-                    continue
-                x, y = t[j], t[(j + 1) % n]
-                base = -edge[x, y]
-                for v in range(start[c], start[c + 1]):
-                    d = base + edge[x, v] + edge[v, y] + node[v]
-                    if d < best:
-                        best, best_j, best_v = d, j, v
-        if best_j == -1:
-            active[1, c] = False
-            continue
-        any_gain = True
-        if best_j == -2:
-            t[i] = best_v
-            _touch(active, cluster_of, t, i)
-            continue
-        _touch(active, cluster_of, t, i)  # the old neighbours (and c)
-        # remove position i, insert best_v after position best_j (indices before removal)
-        if best_j > i:
-            for q in range(i, best_j):
-                t[q] = t[q + 1]
-                pos[cluster_of[t[q]]] = q
-            t[best_j] = best_v
-            pos[c] = best_j
-        else:
-            for q in range(i, best_j + 1, -1):
-                t[q] = t[q - 1]
-                pos[cluster_of[t[q]]] = q
-            t[best_j + 1] = best_v
-            pos[c] = best_j + 1
-        _touch(active, cluster_of, t, pos[c])  # the new neighbours
-    return any_gain
-
-
-@njit(cache=True)
-def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
-          cluster_of: np.ndarray) -> float:
-    """Optimal heads for the cluster order of ``t`` (in place); returns the tour's new cost."""
-    n = len(t)
-    first, size = 0, 1 << 62
-    for i in range(n):
-        c = cluster_of[t[i]]
-        if start[c + 1] - start[c] < size:
-            first, size = i, start[c + 1] - start[c]
-    cap = 0
-    for c in range(len(start) - 1):
-        cap = max(cap, start[c + 1] - start[c])
-    back = np.empty((n, cap), dtype=np.int64)
-    cur = np.empty(cap)
-    new = np.empty(cap)
-    best_total, best_path = np.inf, t.copy()
-    path = np.empty(n, dtype=np.int64)
-    c0 = cluster_of[t[first]]
-    for s in range(start[c0], start[c0 + 1]):
-        cur[0] = node[s]
-        prev_lo, prev_hi = s, s + 1
-        for step in range(1, n):
-            c = cluster_of[t[(first + step) % n]]
-            lo, hi = start[c], start[c + 1]
-            for v in range(lo, hi):
-                bv, bu = np.inf, -1
-                for u in range(prev_lo, prev_hi):
-                    d = cur[u - prev_lo] + edge[u, v]
-                    if d < bv:
-                        bv, bu = d, u
-                new[v - lo] = bv + node[v]
-                back[step, v - lo] = bu
-            for v in range(hi - lo):
-                cur[v] = new[v]
-            prev_lo, prev_hi = lo, hi
-        for v in range(prev_lo, prev_hi):
-            total = cur[v - prev_lo] + edge[v, s]
-            if total < best_total:
-                best_total = total
-                path[n - 1] = v
-                for step in range(n - 1, 0, -1):
-                    c = cluster_of[t[(first + step) % n]]
-                    path[step - 1] = back[step, path[step] - start[c]]
-                for step in range(n):
-                    best_path[(first + step) % n] = path[step]
-    if n == 1:
-        best_total = np.inf
-        for v in range(start[c0], start[c0 + 1]):
-            if node[v] < best_total:
-                best_total = node[v]
-                best_path[0] = v
-    for i in range(n):
-        t[i] = best_path[i]
-    return best_total
-
-
-@njit(cache=True)
-def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
-                 near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray) -> float:
-    """2-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost.
-
-    ``awake`` marks the clusters to look at first (with their tour neighbours): those just
-    inserted, or all of them.
-    """
-    n = len(t)
-    pos = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        pos[cluster_of[t[i]]] = i
-    active = np.zeros((2, n), dtype=np.bool_)
-    for i in range(n):
-        if awake[cluster_of[t[i]]]:
-            _touch(active, cluster_of, t, i)
-    cost = tour_cost(t, edge, node)
-    while True:
-        two_opt(t, pos, edge, near, cluster_of, tol, active)
-        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active)
-        new_cost = tour_cost(t, edge, node)
-        if moved and new_cost < cost - tol:
-            cost = new_cost
-            continue
-        cost = new_cost
-        saved = t.copy()
-        dp = reopt(t, edge, node, start, cluster_of)
-        if dp < cost - tol:
-            cost = dp
-            for i in range(n):
-                if t[i] != saved[i]:
-                    _touch(active, cluster_of, t, i)
-            continue
-        for i in range(n):
-            t[i] = saved[i]
-        return cost
-
-
 @njit(cache=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
-            tol: float) -> tuple[np.ndarray, float]:
+            tol: float, symmetric: bool) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
     (waking the inserted clusters)."""
     drop = remove(t, k, removal, edge, node)
@@ -428,7 +187,7 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
     new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
     awake = np.zeros(len(t), dtype=np.bool_)
     awake[clusters] = True
-    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake)
+    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake, symmetric)
     return new, cost
 
 
@@ -452,13 +211,14 @@ def _roulette(w: np.ndarray) -> int:
 
 
 @njit(cache=True)
-def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.ndarray,
-              weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray, steps: int,
-              edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
-              cluster_of: np.ndarray) -> bool:
+def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: np.ndarray,
+              counts: np.ndarray, weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray,
+              steps: int, edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
+              cluster_of: np.ndarray, symmetric: bool) -> bool:
     """Up to ``steps`` iterations of a trial; whether the trial has ended.
 
-    State, updated in place: ``cur`` and ``best`` (tours), ``costs`` = (current, best, trial best),
+    State, updated in place: ``cur``, ``best`` and ``trial_best`` (tours), ``costs`` = (current,
+    best, trial best),
     ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
     iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
     temperature, end temperature, largest removal, noise, reaction), temperatures and noise in
@@ -477,7 +237,8 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
         level = noise if np.random.random() < 0.5 else 0.0
         cur_cost, best_cost = costs[0], costs[1]
         tol = REL_TOL * max(1.0, abs(cur_cost))
-        new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol)
+        new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol,
+                                symmetric)
         counts[2] += 1
         counts[0] += 1
         if new_cost < best_cost - tol:
@@ -497,6 +258,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
             costs[1] = new_cost
             counts[3] = counts[2]
         if new_cost < costs[2] - tol:
+            trial_best[:] = new
             costs[2] = new_cost
             counts[1] = 0
         else:
@@ -506,15 +268,44 @@ def run_trial(cur: np.ndarray, best: np.ndarray, costs: np.ndarray, counts: np.n
     return counts[0] >= iterations or counts[1] >= patience
 
 
+@njit(cache=True)
+def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
+                          cluster_of: np.ndarray) -> np.ndarray:
+    """A fresh tour (GLNS's cold start): a random node of a random cluster, then the other
+    clusters in random order, each at its cheapest place and head."""
+    k = len(start) - 1
+    order = np.random.permutation(k)
+    first = np.empty(1, dtype=np.int64)
+    first[0] = np.random.randint(start[order[0]], start[order[0] + 1])
+    return insert(first, order[1:].astype(np.int64), 2, 0.0, edge, node, start, near, cluster_of)
+
+
+@njit(cache=True)
+def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``(k, k)``: the least ``edge[i, j]`` from a node of each cluster to a node of each other
+    (one pass over the matrix, row by row)."""
+    k = len(start) - 1
+    dist = np.full((k, k), np.inf)
+    for c in range(k):
+        for i in range(start[c], start[c + 1]):
+            for d in range(k):
+                low = dist[c, d]
+                for j in range(start[d], start[d + 1]):
+                    if edge[i, j] < low:
+                        low = edge[i, j]
+                dist[c, d] = low
+    return dist
+
+
 def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
-    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least distance
-    between any of their nodes), nearest first."""
+    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least edge cost
+    between any of their nodes, in either direction), nearest first."""
     k = len(start) - 1
     count = min(count, k - 1)
     if count <= 0:
         return np.zeros((k, 0), dtype=np.int64)
-    by_row = np.minimum.reduceat(edge, start[:-1], axis=0)  # (k, m)
-    dist = np.minimum.reduceat(by_row, start[:-1], axis=1)  # (k, k)
+    dist = cluster_distances(edge, start)
+    dist = np.minimum(dist, dist.T)
     np.fill_diagonal(dist, np.inf)
     near = np.argpartition(dist, count - 1, axis=1)[:, :count]
     rows = np.arange(k)[:, None]
@@ -530,16 +321,17 @@ def warm_up() -> None:
     node = np.zeros(12)
     start = np.arange(0, 13, 2, dtype=np.int64)
     cluster_of = np.repeat(np.arange(6), 2).astype(np.int64)
-    near = neighbours(edge, start, 3)
     edge.setflags(write=False)  # as gtsp_bench.problem.price leaves them: numba types them apart
     node.setflags(write=False)
+    near = neighbours(edge, start, 3)
     t = np.arange(0, 12, 2, dtype=np.int64)
     for how in range(len(REMOVALS)):
-        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9)
+        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True)
     cur = t.copy()
-    run_trial(cur, cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
+    run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
               np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
-              4, edge, node, start, near, cluster_of)
-    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_))
+              4, edge, node, start, near, cluster_of, True)
+    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
     tour_cost(t, edge, node)
+    random_insertion_tour(edge, node, start, near, cluster_of)
     seed(0)

@@ -1,0 +1,332 @@
+"""The local search of :mod:`gtsp_bench.solvers.heuristics.lns` (numba, ``cache=True``).
+
+Tours and problems as in :mod:`gtsp_bench.solvers.heuristics.lns_kernels`. :func:`local_search`
+repeats, until none improves:
+
+* **2-opt** on the cycle with the heads kept (first improvement; symmetric costs only);
+* **or-opt**: a run of 2 or 3 consecutive clusters, heads and direction kept, moved next to a
+  neighbour of its first or last cluster;
+* **move** (GLNS's "moveopt"): each cluster in turn is taken out and put back at its cheapest
+  position and head, when that is cheaper than where it is;
+* **re-opt** (GLNS's "reopt"): optimal heads for the cluster order, a shortest path through the
+  layers from each node of the smallest cluster.
+
+Don't-look bits (one row per move kind) keep each move to the clusters near where the tour last
+changed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
+    """Node costs plus edge costs of the closed tour ``t``."""
+    n = len(t)
+    total = 0.0
+    for i in range(n):
+        total += node[t[i]] + edge[t[i], t[(i + 1) % n]]
+    return total
+
+
+# ---------------------------------------------------------------------- local search
+@njit(cache=True)
+def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi: int) -> None:
+    """Reverse the cyclic run of positions ``lo .. hi`` (or, the same cycle, its complement when
+    that is shorter), keeping ``pos`` (the position of each cluster) in step."""
+    n = len(t)
+    length = (hi - lo) % n + 1
+    if 2 * length > n:
+        lo, hi, length = (hi + 1) % n, (lo - 1) % n, n - length
+    for x in range(length // 2):
+        p, q = (lo + x) % n, (hi - x) % n
+        t[p], t[q] = t[q], t[p]
+        pos[cluster_of[t[p]]] = p
+        pos[cluster_of[t[q]]] = q
+
+
+@njit(cache=True)
+def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) -> None:
+    """Wake (every don't-look bit of) the cluster at position ``i`` and its two tour neighbours."""
+    n = len(t)
+    for q in (i - 1, i, i + 1):
+        c = cluster_of[t[q % n]]
+        for r in range(active.shape[0]):
+            active[r, c] = True
+
+
+@njit(cache=True)
+def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
+            cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
+    """2-opt with fixed heads over neighbour lists and don't-look bits, first improvement, in place.
+
+    For each awake head ``a`` (``active[0]`` of its cluster) and each cluster ``c`` in
+    ``near[cluster of a]``, the two exchanges that make ``a`` adjacent to ``c``'s head are tried; a
+    head where none improves goes to sleep, the ends of a changed edge wake. Returns whether
+    anything improved.
+    """
+    n = len(t)
+    if n < 5:
+        return False
+    any_gain = False
+    improved = True
+    while improved:
+        improved = False
+        for i in range(n):
+            if not active[0, cluster_of[t[i]]]:
+                continue
+            found = False
+            for w in range(near.shape[1]):
+                a, b, p = t[i], t[(i + 1) % n], t[(i - 1) % n]
+                j = pos[near[cluster_of[a], w]]
+                c, d, e = t[j], t[(j + 1) % n], t[(j - 1) % n]
+                if c != b and d != a:  # a -> c ... b -> d: reverse i + 1 .. j
+                    delta = edge[a, c] + edge[b, d] - edge[a, b] - edge[c, d]
+                    if delta < -tol:
+                        _reverse(t, pos, cluster_of, (i + 1) % n, j)
+                        for x in (a, b, c, d):
+                            _touch(active, cluster_of, t, pos[cluster_of[x]])
+                        improved = found = True
+                        continue
+                if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
+                    delta = edge[a, c] + edge[p, e] - edge[p, a] - edge[e, c]
+                    if delta < -tol:
+                        _reverse(t, pos, cluster_of, i, (j - 1) % n)
+                        for x in (a, p, c, e):
+                            _touch(active, cluster_of, t, pos[cluster_of[x]])
+                        improved = found = True
+            if found:
+                any_gain = True
+            else:
+                active[0, cluster_of[t[i]]] = False
+    return any_gain
+
+
+@njit(cache=True)
+def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
+             start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
+             active: np.ndarray) -> bool:
+    """Each awake cluster (``active[1]``) in turn to its cheapest place and head (GLNS's
+    moveopt), in place.
+
+    The places tried are its own and the edges on either side of the heads of its neighbour
+    clusters ``near[c]``. A cluster that stays goes to sleep; one that moves wakes its old and new
+    neighbours. Returns whether anything improved.
+    """
+    n = len(t)
+    if n < 3:
+        return False
+    any_gain = False
+    for c in np.random.permutation(n):
+        if not active[1, c]:
+            continue
+        i = pos[c]
+        u = t[i]
+        a, b = t[(i - 1) % n], t[(i + 1) % n]
+        base = -edge[a, b]
+        saving = edge[a, u] + node[u] + edge[u, b] + base  # what taking u out saves
+        best, best_j, best_v = saving - tol, -1, -1
+        for v in range(start[c], start[c + 1]):  # the same place with another head
+            d = base + edge[a, v] + edge[v, b] + node[v]
+            if d < best:
+                best, best_j, best_v = d, -2, v
+        for w in range(near.shape[1]):
+            j0 = pos[near[c, w]]
+            for j in ((j0 - 1) % n, j0):  # the edge t[j] -> t[j + 1]
+                if j == i or (j + 1) % n == i:
+                    continue
+                x, y = t[j], t[(j + 1) % n]
+                base = -edge[x, y]
+                for v in range(start[c], start[c + 1]):
+                    d = base + edge[x, v] + edge[v, y] + node[v]
+                    if d < best:
+                        best, best_j, best_v = d, j, v
+        if best_j == -1:
+            active[1, c] = False
+            continue
+        any_gain = True
+        if best_j == -2:
+            t[i] = best_v
+            _touch(active, cluster_of, t, i)
+            continue
+        _touch(active, cluster_of, t, i)  # the old neighbours (and c)
+        # remove position i, insert best_v after position best_j (indices before removal)
+        if best_j > i:
+            for q in range(i, best_j):
+                t[q] = t[q + 1]
+                pos[cluster_of[t[q]]] = q
+            t[best_j] = best_v
+            pos[c] = best_j
+        else:
+            for q in range(i, best_j + 1, -1):
+                t[q] = t[q - 1]
+                pos[cluster_of[t[q]]] = q
+            t[best_j + 1] = best_v
+            pos[c] = best_j + 1
+        _touch(active, cluster_of, t, pos[c])  # the new neighbours
+    return any_gain
+
+
+@njit(cache=True)
+def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
+           cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
+    """Or-opt with fixed heads, first improvement, in place: the run of 2 or 3 clusters starting
+    at an awake cluster (``active[2]``) moves, in its direction, to just after the head of a
+    neighbour of its first cluster or just before the head of a neighbour of its last one. Each
+    arc is priced in its direction, so this is exact on asymmetric costs too. A cluster whose runs
+    do not move goes to sleep; the ends of changed edges wake. Returns whether anything improved.
+    """
+    n = len(t)
+    if n < 6:
+        return False
+    any_gain = False
+    for i in range(n):
+        c = cluster_of[t[i]]
+        if not active[2, c]:
+            continue
+        found = False
+        for length in (2, 3):
+            a, b = t[i], t[(i + length - 1) % n]
+            p, q = t[(i - 1) % n], t[(i + length) % n]
+            gain = edge[p, a] + edge[b, q] - edge[p, q]  # what taking the run out saves
+            if gain <= tol:
+                continue
+            best, best_j = gain - tol, -1
+            for w in range(near.shape[1]):
+                for j in (pos[near[cluster_of[a], w]], (pos[near[cluster_of[b], w]] - 1) % n):
+                    if (j - i + 1) % n <= length:  # the edge t[j] -> t[j + 1] touches the run
+                        continue
+                    x, y = t[j], t[(j + 1) % n]
+                    d = edge[x, a] + edge[b, y] - edge[x, y]
+                    if d < best:
+                        best, best_j = d, j
+            if best_j < 0:
+                continue
+            x, y = t[best_j], t[(best_j + 1) % n]
+            run = np.empty(length, dtype=np.int64)
+            for r in range(length):
+                run[r] = t[(i + r) % n]
+            out = np.empty(n, dtype=np.int64)
+            k = 0
+            for r in range(n - length):
+                v = t[(i + length + r) % n]
+                out[k] = v
+                k += 1
+                if v == x:
+                    for u in range(length):
+                        out[k] = run[u]
+                        k += 1
+            for r in range(n):
+                t[r] = out[r]
+                pos[cluster_of[out[r]]] = r
+            for z in (p, q, a, b, x, y):
+                _touch(active, cluster_of, t, pos[cluster_of[z]])
+            found = True
+            break
+        if found:
+            any_gain = True
+        else:
+            active[2, c] = False
+    return any_gain
+
+
+@njit(cache=True)
+def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+          cluster_of: np.ndarray) -> float:
+    """Optimal heads for the cluster order of ``t`` (in place); returns the tour's new cost."""
+    n = len(t)
+    first, size = 0, 1 << 62
+    for i in range(n):
+        c = cluster_of[t[i]]
+        if start[c + 1] - start[c] < size:
+            first, size = i, start[c + 1] - start[c]
+    cap = 0
+    for c in range(len(start) - 1):
+        cap = max(cap, start[c + 1] - start[c])
+    back = np.empty((n, cap), dtype=np.int64)
+    cur = np.empty(cap)
+    new = np.empty(cap)
+    best_total, best_path = np.inf, t.copy()
+    path = np.empty(n, dtype=np.int64)
+    c0 = cluster_of[t[first]]
+    for s in range(start[c0], start[c0 + 1]):
+        cur[0] = node[s]
+        prev_lo, prev_hi = s, s + 1
+        for step in range(1, n):
+            c = cluster_of[t[(first + step) % n]]
+            lo, hi = start[c], start[c + 1]
+            for v in range(lo, hi):
+                bv, bu = np.inf, -1
+                for u in range(prev_lo, prev_hi):
+                    d = cur[u - prev_lo] + edge[u, v]
+                    if d < bv:
+                        bv, bu = d, u
+                new[v - lo] = bv + node[v]
+                back[step, v - lo] = bu
+            for v in range(hi - lo):
+                cur[v] = new[v]
+            prev_lo, prev_hi = lo, hi
+        for v in range(prev_lo, prev_hi):
+            total = cur[v - prev_lo] + edge[v, s]
+            if total < best_total:
+                best_total = total
+                path[n - 1] = v
+                for step in range(n - 1, 0, -1):
+                    c = cluster_of[t[(first + step) % n]]
+                    path[step - 1] = back[step, path[step] - start[c]]
+                for step in range(n):
+                    best_path[(first + step) % n] = path[step]
+    if n == 1:
+        best_total = np.inf
+        for v in range(start[c0], start[c0 + 1]):
+            if node[v] < best_total:
+                best_total = node[v]
+                best_path[0] = v
+    for i in range(n):
+        t[i] = best_path[i]
+    return best_total
+
+
+@njit(cache=True)
+def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+                 near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
+                 symmetric: bool) -> float:
+    """2-opt, or-opt, move and re-opt on ``t`` (in place) until none improves; returns the cost.
+
+    ``awake`` marks the clusters to look at first (with their tour neighbours): those just
+    inserted, or all of them. Without ``symmetric`` (directed costs) there is no 2-opt: it reverses
+    part of the tour, priced as if each edge cost the same both ways; or-opt, move and re-opt price
+    every edge in its direction.
+    """
+    n = len(t)
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[cluster_of[t[i]]] = i
+    active = np.zeros((3, n), dtype=np.bool_)
+    for i in range(n):
+        if awake[cluster_of[t[i]]]:
+            _touch(active, cluster_of, t, i)
+    cost = tour_cost(t, edge, node)
+    while True:
+        if symmetric:
+            two_opt(t, pos, edge, near, cluster_of, tol, active)
+        moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
+        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active) or moved
+        new_cost = tour_cost(t, edge, node)
+        if moved and new_cost < cost - tol:
+            cost = new_cost
+            continue
+        cost = new_cost
+        saved = t.copy()
+        dp = reopt(t, edge, node, start, cluster_of)
+        if dp < cost - tol:
+            cost = dp
+            for i in range(n):
+                if t[i] != saved[i]:
+                    _touch(active, cluster_of, t, i)
+            continue
+        for i in range(n):
+            t[i] = saved[i]
+        return cost

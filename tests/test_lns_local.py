@@ -1,0 +1,99 @@
+"""The lns local search (compiled): feasible tours, costs that never rise, re-opt = the shared
+DP, and on directed costs no single move, re-opt or or-opt left that improves."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics import lns_local
+
+from .test_lns_kernels import _asymmetric_problem, _directed_cost, _feasible, _problem, _random_tour
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_local_search_never_worse_and_feasible(seed):
+    """From random tours, the local search keeps one node per cluster and never raises the cost;
+    its returned cost is the tour's cost."""
+    p, start, cluster_of = _problem(14, 5, seed)
+    near = kernels.neighbours(p.edge_cost, start, 5)
+    rng = np.random.default_rng(seed)
+    for _ in range(5):
+        t = _random_tour(p, rng)
+        before = p.tour_cost(t)
+        awake = np.ones(p.n_clusters, dtype=bool)
+        cost = lns_local.local_search(t, p.edge_cost, p.node_cost, start, near, cluster_of, 1e-9, awake, True)
+        assert _feasible(p, t)
+        assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
+        assert cost <= before + 1e-9
+
+
+@pytest.mark.parametrize("depot", [True, False])
+def test_reopt_matches_optimal_heads(depot):
+    """Re-opt gives the cost of the shared layered shortest path for the same order."""
+    p, start, cluster_of = _problem(9, 4, 1, depot)
+    rng = np.random.default_rng(0)
+    for _ in range(4):
+        t = _random_tour(p, rng)
+        cost = lns_local.reopt(t, p.edge_cost, p.node_cost, start, cluster_of)
+        if p.depot is not None:
+            t0 = np.roll(t, -int(np.flatnonzero(t == p.depot)[0]))
+            order = p.cluster_of[t0[1:]]
+        else:
+            order = p.cluster_of[t]
+        assert cost == pytest.approx(optimal_heads(p, order)[1], rel=1e-12)
+        assert cost == pytest.approx(p.tour_cost(t), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_asymmetric_local_search_prices_each_arc_in_its_direction(seed):
+    """Directed costs: the local search (no 2-opt) never raises the directed cost, returns it, and
+    leaves a tour that no single move of a cluster (any place, any head), re-opt or or-opt move
+    of a run of 2-3 clusters improves."""
+    k = 12
+    edge, node, start, cluster_of = _asymmetric_problem(k, seed)
+    near = kernels.neighbours(edge, start, k - 1)
+    rng = np.random.default_rng(seed)
+    t = np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(k)], dtype=np.int64)
+    before = _directed_cost(t, edge)
+    cost = lns_local.local_search(t, edge, node, start, near, cluster_of, 1e-9, np.ones(k, dtype=bool), False)
+    assert len(set(cluster_of[t].tolist())) == k
+    assert cost == pytest.approx(_directed_cost(t, edge), rel=1e-12) and cost <= before + 1e-9
+    for i in range(k):  # every single-cluster move, priced from scratch
+        rest = np.delete(t, i)
+        c = cluster_of[t[i]]
+        for j in range(k - 1):
+            for v in range(start[c], start[c + 1]):
+                assert _directed_cost(np.insert(rest, j + 1, v), edge) >= cost - 1e-9
+    assert lns_local.reopt(t.copy(), edge, node, start, cluster_of) >= cost - 1e-9
+    for length in (2, 3):  # every or-opt move of a run, direction kept, priced from scratch
+        for i in range(k):
+            rolled = np.roll(t, -i)
+            run, rest = rolled[:length], rolled[length:]
+            for j in range(len(rest)):
+                moved = np.concatenate([rest[:j + 1], run, rest[j + 1:]])
+                assert _directed_cost(moved, edge) >= cost - 1e-9
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_or_opt_never_worse_and_feasible(seed):
+    """Or-opt alone on random tours: one node per cluster, heads kept, the cost only falls, and
+    it does fall on some of them."""
+    p, start, cluster_of = _problem(15, 3, seed)
+    near = kernels.neighbours(p.edge_cost, start, 6)
+    rng = np.random.default_rng(seed)
+    gained = 0
+    for _ in range(4):
+        t = _random_tour(p, rng)
+        pos = np.empty(len(t), dtype=np.int64)
+        pos[cluster_of[t]] = np.arange(len(t))
+        before, heads = p.tour_cost(t), set(t.tolist())
+        awake = np.ones((3, len(t)), dtype=bool)
+        moved = lns_local.or_opt(t, pos, p.edge_cost, near, cluster_of, 1e-9, awake)
+        assert _feasible(p, t) and set(t.tolist()) == heads
+        assert np.array_equal(pos[cluster_of[t]], np.arange(len(t)))
+        assert p.tour_cost(t) <= before + 1e-9
+        assert moved == (p.tour_cost(t) < before - 1e-9)
+        gained += moved
+    assert gained > 0
