@@ -341,7 +341,7 @@ def test_import_graph_is_read_right():
     assert "gtsp_bench.parse" in graph["gtsp_bench.io"]
     assert "gtsp_bench.gtsplib" not in graph["gtsp_bench.io"]
     assert "gtsp_bench.solvers.heuristics.greedy" in graph["gtsp_bench.solvers.exact.dp"]
-    assert "gtsp_bench.report" in graph["gtsp_bench.cli"]  # imported inside a command function
+    assert "gtsp_bench.report" in graph["gtsp_bench.cli_bench"]  # imported inside a command function
     assert all(m.startswith("gtsp_bench") for targets in graph.values() for m in targets)
 
 
