@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
-from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.heads import optimal_heads
@@ -35,6 +35,13 @@ from gtsp_bench.registry import Solution
 PRICE_PER_NODE = 2
 #: Largest share of the time limit that pruning may take.
 PRUNE_SHARE = 0.2
+#: Candidates whose children's LPs are solved before branching (strong branching).
+STRONG_CANDIDATES = 8
+#: A dive stops at a node whose bound is above the best open one by more than this share of the
+#: gap between that one and the incumbent (then the best open node is taken).
+DIVE_SHARE = 0.3
+#: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
+RESTART_SHARE = 0.05
 
 
 # ---------------------------------------------------------------------- the method
@@ -253,12 +260,13 @@ class _Search:
 
     # -------------------------------------------------------------- own branch and cut
     def branch_and_cut(self) -> None:
-        """Branch and cut with the backend as LP solver: best first, diving into a child.
+        """Branch and cut with the backend as LP solver: best first, diving into a child while
+        its bound stays near the best open one (:data:`DIVE_SHARE`).
 
         Each node runs the root's cut loop; columns not in the LP are priced in while their
         reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
-        fixes columns by reduced cost for its subtree and branches on the fractional ``y``
-        closest to 1/2 (``y = 1`` fixes a cluster's head), else on such an ``x``. Cuts are
+        fixes columns by reduced cost for its subtree and branches by :meth:`_branching` (strong
+        branching among the fractional ``y`` closest to 1/2, else such ``x``). Cuts are
         global; slack ones are purged.
         """
         lp = self.lp
@@ -288,15 +296,19 @@ class _Search:
                     bound, col, value, fix = outcome
                     base = _padded(applied, len(lp.cols))
                     base[fix] = 0
-                    first, second = (1, 0) if value >= 0.5 else (0, 1)
+                    first, second = (1, 0) if value >= 0.5 else (0, 1)  # dive into ``value``
                     children = []
                     for v in (first, second):
                         child = base.copy()
                         child[col] = v
                         children.append(child)
                     seq += 2
+                    best_other = heap[0].bound if heap else bound
                     heapq.heappush(heap, _Node(bound, seq, children[1]))
-                    node = _Node(bound, seq - 1, children[0])  # dive
+                    node = _Node(bound, seq - 1, children[0])  # dive, unless far above the best
+                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):
+                        heapq.heappush(heap, node)
+                        node = None
             else:
                 node = None
             if node is None and heap:
@@ -344,21 +356,47 @@ class _Search:
                 rc = res.reduced_costs
                 fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
                                      & (res.values < TOL))
-                return res.objective, *self._branching(res.values), fix
+                return res.objective, *self._branching(res.values, res.objective), fix
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
 
-    def _branching(self, values: np.ndarray) -> tuple[int, float]:
-        """Backend column to branch on and its value: the fractional y closest to 1/2, else x."""
+    def _branching(self, values: np.ndarray, objective: float) -> tuple[int, float]:
+        """Backend column to branch on and the value of the child to dive into.
+
+        Candidates: the fractional ``y`` closest to 1/2 (else such ``x``), at most
+        :data:`STRONG_CANDIDATES`; with more than one, each child's LP is solved (strong
+        branching, over the columns in the LP) and the column whose children raise the bound
+        most (product of the two gains) is taken; the dive goes to the child of lower LP value.
+        """
         is_y = self.lp.cols < self.model.n_nodes
         frac = np.abs(values - np.round(values)) > 1e-6
         for group in (is_y, ~is_y):
             cand = np.flatnonzero(group & frac)
             if len(cand):
-                col = int(cand[np.argmin(np.abs(values[cand] - 0.5))])
-                return col, float(values[col])
-        raise AssertionError("no fractional column to branch on")
+                break
+        else:
+            raise AssertionError("no fractional column to branch on")
+        cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:STRONG_CANDIDATES]]
+        if len(cand) == 1:
+            return int(cand[0]), float(round(values[cand[0]]))
+        backend, best, pick = self.lp.backend, -1.0, (int(cand[0]), float(round(values[cand[0]])))
+        for col in cand:
+            child = []
+            for v in (0.0, 1.0):
+                backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
+                res = self.solve_lp()
+                child.append(math.inf if res.status == "infeasible" else
+                             res.objective if res.status == "optimal" else objective)
+            backend.set_bounds(np.array([col]), np.zeros(1), np.ones(1))
+            self.stats["strong_lps"] = self.stats.get("strong_lps", 0) + 2
+            gains = [max(min(c, self.ub) - objective, 1e-6 * max(1.0, abs(objective))) for c in child]
+            score = gains[0] * gains[1]
+            if score > best:
+                best, pick = score, (int(col), 0.0 if child[0] <= child[1] else 1.0)
+            if self.left() <= 0:
+                break
+        return pick
 
 
 def solve_exact(
@@ -420,6 +458,17 @@ def solve_exact(
         kept = prune_heads(problem, deadline=prune_by) if options.prune else problem.clusters
     search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
     search.root()
+    if not search.proven and search.left() > 0:
+        # the root did not finish: LNS restarts for a small share of the limit, and a root loop
+        # again against a better incumbent (fixing more columns by reduced cost)
+        with _Timer(stats, "heuristic_s"):
+            budget = None if time_limit is None else time.perf_counter() + RESTART_SHARE * time_limit
+            better = restart_tours(problem, search.tour, seed, min(budget or math.inf, deadline)
+                                   if budget is not None else None)
+        if problem.tour_cost(better) < search.ub:
+            stats["restart_gain"] = search.ub - problem.tour_cost(better)
+            search.tour, search.ub = better, problem.tour_cost(better)
+            search.root()
     if not search.proven and search.left() > 0:
         if isinstance(search.lp.backend, LazyMipBackend):
             search.native_mip()
