@@ -467,7 +467,7 @@ def solve_exact(
             budget = None if time_limit is None else time.perf_counter() + RESTART_SHARE * time_limit
             better = restart_tours(problem, search.tour, seed, min(budget or math.inf, deadline)
                                    if budget is not None else None)
-        if problem.tour_cost(better) < search.ub:
+        if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
             stats["restart_gain"] = search.ub - problem.tour_cost(better)
             search.tour, search.ub = better, problem.tour_cost(better)
             search.root()
