@@ -293,8 +293,13 @@ class _Search:
                 if outcome == "stopped":
                     heapq.heappush(heap, node)
                     break
+                if isinstance(outcome, tuple) and len(outcome) == 2:  # the same node, one more fix
+                    fixes = _padded(applied, len(lp.cols)).copy()
+                    fixes[outcome[0]] = int(outcome[1])
+                    node = _Node(node.bound, node.seq, fixes)
+                    continue
                 node = None
-                if isinstance(outcome, tuple):
+                if isinstance(outcome, tuple) and len(outcome) == 4:
                     bound, col, value, fix = outcome
                     base = _padded(applied, len(lp.cols))
                     base[fix] = 0
@@ -321,10 +326,11 @@ class _Search:
             self.lb = max(self.lb, min(best_open, self.ub - self.gap))
         self.stats["bc_nodes"] = explored
 
-    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | str | None:
-        """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit, else
-        (bound, backend column and its value to branch on, backend columns fixed by reduced
-        cost in the subtree)."""
+    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | tuple[int, float] | str | None:
+        """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit,
+        (backend column, value) when strong branching showed that the node's solutions below the
+        incumbent all have the column at that value, else (bound, backend column and its value
+        to branch on, backend columns fixed by reduced cost in the subtree)."""
         lp = self.lp
         history: list[float] = []
         while self.left() > 0:
@@ -358,13 +364,33 @@ class _Search:
                 rc = res.reduced_costs
                 fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
                                      & (res.values < TOL))
-                return res.objective, *self._branching(res.values, res.objective), fix
+                choice = self._branching(res.values, res.objective)
+                if choice is None:
+                    return None
+                col, value, only = choice
+                if only:  # the other child is empty: fix the column here and go on
+                    return col, value
+                return res.objective, col, value, fix
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
 
-    def _branching(self, values: np.ndarray, objective: float) -> tuple[int, float]:
-        """Backend column to branch on and the value of the child to dive into.
+    def _child_is_empty(self, res: LpResult, absent: np.ndarray) -> bool:
+        """Whether a strong-branching child's LP shows that it holds nothing below the incumbent
+        (its LP covers the columns in the LP only: with columns absent, a Lagrangian bound)."""
+        if res.status == "infeasible":
+            return len(absent) == 0
+        if res.status != "optimal" or res.objective <= self.ub - self.gap or res.duals is None:
+            return False
+        if len(absent) == 0:
+            return True
+        rc = self.lp.reduced_costs(res.duals, absent)
+        return res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap
+
+    def _branching(self, values: np.ndarray, objective: float) -> tuple[int, float, bool] | None:
+        """Backend column to branch on, the value of the child to dive into, and whether the
+        other child is empty (then the column is fixed to that value, no branching); ``None``
+        when both children are empty (the node is pruned).
 
         Candidates: the fractional ``y`` closest to 1/2 (else such ``x``), at most
         :data:`STRONG_CANDIDATES`; with more than one, each child's LP is solved (strong
@@ -381,21 +407,30 @@ class _Search:
             raise AssertionError("no fractional column to branch on")
         cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:STRONG_CANDIDATES]]
         if len(cand) == 1:
-            return int(cand[0]), float(round(values[cand[0]]))
-        backend, best, pick = self.lp.backend, -1.0, (int(cand[0]), float(round(values[cand[0]])))
+            return int(cand[0]), float(round(values[cand[0]])), False
+        backend, best = self.lp.backend, -1.0
+        pick = int(cand[0]), float(round(values[cand[0]])), False
+        absent = self.absent()
         for col in cand:
-            child = []
+            child, empty = [], []
             for v in (0.0, 1.0):
                 backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
                 res = self.solve_lp()
+                empty.append(self._child_is_empty(res, absent))
                 child.append(math.inf if res.status == "infeasible" else
                              res.objective if res.status == "optimal" else objective)
             backend.set_bounds(np.array([col]), np.zeros(1), np.ones(1))
             self.stats["strong_lps"] = self.stats.get("strong_lps", 0) + 2
+            if empty[0] and empty[1]:
+                self.stats["strong_pruned"] = self.stats.get("strong_pruned", 0) + 1
+                return None
+            if empty[0] or empty[1]:
+                self.stats["strong_fixed"] = self.stats.get("strong_fixed", 0) + 1
+                return int(col), 1.0 if empty[0] else 0.0, True
             gains = [max(min(c, self.ub) - objective, 1e-6 * max(1.0, abs(objective))) for c in child]
             score = gains[0] * gains[1]
             if score > best:
-                best, pick = score, (int(col), 0.0 if child[0] <= child[1] else 1.0)
+                best, pick = score, (int(col), 0.0 if child[0] <= child[1] else 1.0, False)
             if self.left() <= 0:
                 break
         return pick
