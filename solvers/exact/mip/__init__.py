@@ -47,7 +47,7 @@ branch and cut here proves it in about 20 s.
 
 Modules, each importing only the ones above it:
 
-* :mod:`~gtsp_bench.solvers.exact.mip.options`: :class:`MipOptions` (the solvers' shared options)
+* :mod:`~gtsp_bench.solvers.exact.mip.options`: :class:`MipOptions` (the solvers' shared options),
   the upper-bound tour and its restarts;
 * :mod:`~gtsp_bench.solvers.exact.mip.model`: the numerical tolerances, :class:`GtspModel` (columns,
   base rows, cycles and tour of an integer point), :func:`build_model`, the core columns;
