@@ -226,7 +226,8 @@ class _Search:
                 continue
             lp.purge(values, 3)
             lp.add_cuts(new)
-        self.stats["root_rounds"], self.stats["root_bound"] = rounds, float(self.lb)
+        self.stats["root_rounds"] = self.stats.get("root_rounds", 0) + rounds  # (over both loops)
+        self.stats["root_bound"] = float(self.lb)
         self.stats["root_cuts"] = len(lp.cuts)
 
     def absent(self) -> np.ndarray:
@@ -499,9 +500,9 @@ def solve_exact(
         # the root did not finish: LNS restarts for a small share of the limit, and a root loop
         # again against a better incumbent (fixing more columns by reduced cost)
         with _Timer(stats, "heuristic_s"):
-            budget = None if time_limit is None else time.perf_counter() + RESTART_SHARE * time_limit
-            better = restart_tours(problem, search.tour, seed, min(budget or math.inf, deadline)
-                                   if budget is not None else None)
+            until = None if time_limit is None else min(deadline, time.perf_counter()
+                                                         + RESTART_SHARE * time_limit)
+            better = restart_tours(problem, search.tour, seed, until)
         if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
             stats["restart_gain"] = search.ub - problem.tour_cost(better)
             search.tour, search.ub = better, problem.tour_cost(better)
