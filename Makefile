@@ -19,6 +19,7 @@ $(STAMP): pyproject.toml constraints.txt
 		-c constraints.txt -e '.[dev,gurobi,pyvrp,lkh,dask]'
 	@echo "compiling lns's kernels once (numba, cached beside the module; about a minute)"
 	$(BIN)/python -c "from gtsp_bench.solvers.heuristics.lns_kernels import warm_up; warm_up()"
+	$(BIN)/python -c "from gtsp_bench.solvers.exact.mip.flow import warm_up; warm_up()"
 	touch $(STAMP)
 
 test: $(STAMP)

@@ -13,8 +13,10 @@ comma-separated list of names). UAV: ``gtsp-bench generate``'s instances, N = 20
 cluster, zeta = 50 m, area 1000 m (2000 m from K = 100 on), depot at the middle of the bottom
 edge, seeds ``--seeds``, each at every omega of ``--omegas``.
 
-The gap is ``(objective - bound) / objective``; a proven optimum has gap 0. For GTSPLIB the best
-known value is shown and ``match`` says whether the objective equals it (``BETTER`` below it).
+The gap is ``(objective - bound) / objective``; a proven optimum has gap 0. ``time s`` is the
+solve's wall time, ``cpu s`` the process's CPU time over it (on a shared machine the two differ).
+For GTSPLIB the best known value is shown and ``match`` says whether the objective equals it
+(``BETTER`` below it).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from gtsp_bench.tables import Row, solve, write_csv
 #: Node counts of the two GTSPLIB groups (symmetric instances only).
 SMALL_NODES, LARGE_NODES = 442, 1084
 COLUMNS = ("group", "instance", "clusters", "nodes", "omega", "status", "objective", "lower_bound",
-           "gap_percent", "runtime_s", "best_known", "match")
+           "gap_percent", "runtime_s", "cpu_s", "best_known", "match")
 
 
 @dataclass(frozen=True)
@@ -94,17 +96,17 @@ def match(row: Row, best: float | None) -> str:
     return "yes" if row.objective == best else ("BETTER" if row.objective < best else "no")
 
 
-def line(job: Job, row: Row) -> str:
-    """One table line."""
+def line(job: Job, row: Row, cpu: float) -> str:
+    """One table line (``cpu``: the process's CPU seconds during the solve)."""
     proven = "yes" if row.status == "optimal" else row.status
     omega = "" if job.omega is None else f"{job.omega:g}"
     best = "" if job.best is None else f"{job.best:.0f}"
     return (f"{job.name:<16} {job.instance.n_clusters:>4} {job.instance.n_nodes:>5} {omega:>5} "
-            f"{proven:>10} {row.runtime_s:>8.1f} {row.objective:>12.2f} {row.lower_bound:>12.2f} "
+            f"{proven:>10} {row.runtime_s:>8.1f} {cpu:>7.1f} {row.objective:>12.2f} {row.lower_bound:>12.2f} "
             f"{gap_percent(row):>7.3f} {best:>8} {match(row, job.best):>6}")
 
 
-HEADER = (f"{'instance':<16} {'K':>4} {'n':>5} {'omega':>5} {'proven':>10} {'time s':>8} "
+HEADER = (f"{'instance':<16} {'K':>4} {'n':>5} {'omega':>5} {'proven':>10} {'time s':>8} {'cpu s':>7} "
           f"{'objective':>12} {'bound':>12} {'gap %':>7} {'best':>8} {'match':>6}")
 
 
@@ -145,12 +147,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"{args.solver}, time limit {args.time_limit:g} s per solve", flush=True)
     print(HEADER + "\n" + "-" * len(HEADER), flush=True)
     done: list[tuple[Job, Row]] = []
+    cpus: list[float] = []
     bad = 0
     start = time.perf_counter()
     for job in jobs(args):
+        cpu = time.process_time()
         row = solve(job.group, job.instance, job.omega, args.solver, args.time_limit, args.solver_seed)
+        cpus.append(time.process_time() - cpu)
         done.append((job, row))
-        print(line(job, row), flush=True)
+        print(line(job, row, cpus[-1]), flush=True)
         ref = refs.get(job.name) if job.group == "GTSPLIB" else None
         proven = ref is not None and ref.status == "optimal" and row.status == "optimal"
         if proven and row.objective != ref.value:
@@ -162,8 +167,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         write_csv(args.csv, COLUMNS, (
             [j.group, j.name, j.instance.n_clusters, j.instance.n_nodes,
              "" if j.omega is None else j.omega, r.status, repr(r.objective), repr(r.lower_bound),
-             f"{gap_percent(r):.4f}", f"{r.runtime_s:.2f}", "" if j.best is None else j.best,
-             match(r, j.best)] for j, r in done))
+             f"{gap_percent(r):.4f}", f"{r.runtime_s:.2f}", f"{c:.2f}", "" if j.best is None else j.best,
+             match(r, j.best)] for (j, r), c in zip(done, cpus, strict=True)))
     return 1 if bad else 0
 
 

@@ -89,6 +89,17 @@ def test_branch_and_cut_runs_and_agrees_with_dp():
     assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
 
 
+def test_strong_branching_and_restarts_prove_the_optimum():
+    """14st70 with one root round and the greedy tour as first incumbent: the root does not
+    prove it, so LNS restarts improve the incumbent and the branch and cut (strong branching)
+    proves the literature optimum."""
+    r = run_solver(Milp(root_rounds=1, lns_trials=0), read_instance(GTSPLIB / "14st70.gtsp.gz"), None)
+    assert r.status == "optimal"
+    assert r.objective == 316 and r.lower_bound == 316
+    assert r.stats["restart_gain"] > 0
+    assert r.stats["bc_nodes"] >= 2 and r.stats["strong_lps"] >= 4
+
+
 @pytest.mark.parametrize("name, best", [("11berlin52", 4040), ("20kroA100", 9711)])
 def test_proves_gtsplib_optima(name, best):
     """The literature optima of the two smallest GTSPLIB samples, proven (integer bound)."""

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
-from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
@@ -37,3 +39,17 @@ def test_upper_bound_tour_is_a_tour_no_better_than_the_optimum(trials, seed):
     assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
     assert problem.tour_cost(tour) >= run_solver("dp", inst, 0.5).objective * (1 - 1e-12)
     assert np.array_equal(tour, upper_bound_tour(problem, trials, seed, None))  # reproducible
+
+
+@pytest.mark.parametrize("deadline", [None, 0.0])
+def test_restart_tours_never_worse_and_a_tour(deadline):
+    """LNS restarts from the greedy tour: a tour through every cluster, no dearer than the one
+    given and no cheaper than the optimum; a deadline already past still allows one restart."""
+    inst = generate_instance(12, 5, seed=4)
+    problem = price(inst, 0.5)
+    start = upper_bound_tour(problem, 0, 0, None)
+    when = None if deadline is None else time.perf_counter() + deadline
+    tour = restart_tours(problem, start, 0, when)
+    assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
+    assert problem.tour_cost(tour) <= problem.tour_cost(start)
+    assert problem.tour_cost(tour) >= run_solver("dp", inst, 0.5).objective * (1 - 1e-12)

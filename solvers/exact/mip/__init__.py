@@ -33,9 +33,11 @@ of the GTSP):
    ``x(i : D) <= y_i`` by enumeration, generalized subtour cuts by one max-flow per cluster on
    the support graph (exact for that cluster and a source cluster), and blossoms of the tour
    over the clusters (handles grown along its fractional part); slack cuts are purged;
-4. unless the root proved the upper bound optimal, branch and cut with the backend as LP solver:
-   best first with diving, the same cuts, pricing and reduced-cost fixing at every node,
-   branching on ``y`` first. A backend with lazy constraints (Gurobi) solves the MILP itself
+4. unless the root proved the upper bound optimal, LNS restarts with other seeds (a small share
+   of the time limit) and, after a better tour, the root loop again; then branch and cut with
+   the backend as LP solver: best first with bounded dives, the same cuts, pricing and
+   reduced-cost fixing at every node, strong branching on ``y`` first (a child shown empty fixes
+   the column at the node instead). A backend with lazy constraints (Gurobi) solves the MILP itself
    instead, over every column not fixed, adding subtour rows from a callback.
 
 Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20
@@ -45,10 +47,12 @@ branch and cut here proves it in about 20 s.
 
 Modules, each importing only the ones above it:
 
-* :mod:`~gtsp_bench.solvers.exact.mip.options`: :class:`MipOptions` (the solvers' shared options)
-  and the upper-bound tour;
+* :mod:`~gtsp_bench.solvers.exact.mip.options`: :class:`MipOptions` (the solvers' shared options),
+  the upper-bound tour and its restarts;
 * :mod:`~gtsp_bench.solvers.exact.mip.model`: the numerical tolerances, :class:`GtspModel` (columns,
   base rows, cycles and tour of an integer point), :func:`build_model`, the core columns;
+* :mod:`~gtsp_bench.solvers.exact.mip.flow`: the compiled max-flow and residual reachability
+  (numba) under the generalized subtour separation;
 * :mod:`~gtsp_bench.solvers.exact.mip.separation`: :class:`Cuts` and the separators (subtour
   rows of an integer point, generalized subtour cuts by max-flow, node-cluster rows, blossoms,
   :func:`separate`);

@@ -211,6 +211,7 @@ class HighsBackend:
         self._hs = highspy
         self.h = highspy.Highs()
         self.h.setOptionValue("output_flag", options.verbose)
+        self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""

@@ -19,12 +19,14 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
-from gtsp_bench.solvers.exact.mip.options import MipOptions, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics import lns_kernels
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
@@ -35,6 +37,13 @@ from gtsp_bench.registry import Solution
 PRICE_PER_NODE = 2
 #: Largest share of the time limit that pruning may take.
 PRUNE_SHARE = 0.2
+#: Candidates whose children's LPs are solved before branching (strong branching).
+STRONG_CANDIDATES = 8
+#: A dive stops at a node whose bound is above the best open one by more than this share of the
+#: gap between that one and the incumbent (then the best open node is taken).
+DIVE_SHARE = 0.3
+#: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
+RESTART_SHARE = 0.05
 
 
 # ---------------------------------------------------------------------- the method
@@ -217,7 +226,8 @@ class _Search:
                 continue
             lp.purge(values, 3)
             lp.add_cuts(new)
-        self.stats["root_rounds"], self.stats["root_bound"] = rounds, float(self.lb)
+        self.stats["root_rounds"] = self.stats.get("root_rounds", 0) + rounds  # (over both loops)
+        self.stats["root_bound"] = float(self.lb)
         self.stats["root_cuts"] = len(lp.cuts)
 
     def absent(self) -> np.ndarray:
@@ -253,12 +263,13 @@ class _Search:
 
     # -------------------------------------------------------------- own branch and cut
     def branch_and_cut(self) -> None:
-        """Branch and cut with the backend as LP solver: best first, diving into a child.
+        """Branch and cut with the backend as LP solver: best first, diving into a child while
+        its bound stays near the best open one (:data:`DIVE_SHARE`).
 
         Each node runs the root's cut loop; columns not in the LP are priced in while their
         reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
-        fixes columns by reduced cost for its subtree and branches on the fractional ``y``
-        closest to 1/2 (``y = 1`` fixes a cluster's head), else on such an ``x``. Cuts are
+        fixes columns by reduced cost for its subtree and branches by :meth:`_branching` (strong
+        branching among the fractional ``y`` closest to 1/2, else such ``x``). Cuts are
         global; slack ones are purged.
         """
         lp = self.lp
@@ -283,20 +294,29 @@ class _Search:
                 if outcome == "stopped":
                     heapq.heappush(heap, node)
                     break
+                if isinstance(outcome, tuple) and len(outcome) == 2:  # the same node, one more fix
+                    fixes = _padded(applied, len(lp.cols)).copy()
+                    fixes[outcome[0]] = int(outcome[1])
+                    node = _Node(node.bound, node.seq, fixes)
+                    continue
                 node = None
-                if isinstance(outcome, tuple):
+                if isinstance(outcome, tuple) and len(outcome) == 4:
                     bound, col, value, fix = outcome
                     base = _padded(applied, len(lp.cols))
                     base[fix] = 0
-                    first, second = (1, 0) if value >= 0.5 else (0, 1)
+                    first, second = (1, 0) if value >= 0.5 else (0, 1)  # dive into ``value``
                     children = []
                     for v in (first, second):
                         child = base.copy()
                         child[col] = v
                         children.append(child)
                     seq += 2
+                    best_other = heap[0].bound if heap else bound
                     heapq.heappush(heap, _Node(bound, seq, children[1]))
-                    node = _Node(bound, seq - 1, children[0])  # dive
+                    node = _Node(bound, seq - 1, children[0])  # dive, unless far above the best
+                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):
+                        heapq.heappush(heap, node)
+                        node = None
             else:
                 node = None
             if node is None and heap:
@@ -307,10 +327,11 @@ class _Search:
             self.lb = max(self.lb, min(best_open, self.ub - self.gap))
         self.stats["bc_nodes"] = explored
 
-    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | str | None:
-        """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit, else
-        (bound, backend column and its value to branch on, backend columns fixed by reduced
-        cost in the subtree)."""
+    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | tuple[int, float] | str | None:
+        """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit,
+        (backend column, value) when strong branching showed that the node's solutions below the
+        incumbent all have the column at that value, else (bound, backend column and its value
+        to branch on, backend columns fixed by reduced cost in the subtree)."""
         lp = self.lp
         history: list[float] = []
         while self.left() > 0:
@@ -344,21 +365,76 @@ class _Search:
                 rc = res.reduced_costs
                 fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
                                      & (res.values < TOL))
-                return res.objective, *self._branching(res.values), fix
+                choice = self._branching(res.values, res.objective)
+                if choice is None:
+                    return None
+                col, value, only = choice
+                if only:  # the other child is empty: fix the column here and go on
+                    return col, value
+                return res.objective, col, value, fix
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
 
-    def _branching(self, values: np.ndarray) -> tuple[int, float]:
-        """Backend column to branch on and its value: the fractional y closest to 1/2, else x."""
+    def _child_is_empty(self, res: LpResult, absent: np.ndarray) -> bool:
+        """Whether a strong-branching child's LP shows that it holds nothing below the incumbent
+        (its LP covers the columns in the LP only: with columns absent, a Lagrangian bound)."""
+        if res.status == "infeasible":
+            return len(absent) == 0
+        if res.status != "optimal" or res.objective <= self.ub - self.gap or res.duals is None:
+            return False
+        if len(absent) == 0:
+            return True
+        rc = self.lp.reduced_costs(res.duals, absent)
+        return res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap
+
+    def _branching(self, values: np.ndarray, objective: float) -> tuple[int, float, bool] | None:
+        """Backend column to branch on, the value of the child to dive into, and whether the
+        other child is empty (then the column is fixed to that value, no branching); ``None``
+        when both children are empty (the node is pruned).
+
+        Candidates: the fractional ``y`` closest to 1/2 (else such ``x``), at most
+        :data:`STRONG_CANDIDATES`; with more than one, each child's LP is solved (strong
+        branching, over the columns in the LP) and the column whose children raise the bound
+        most (product of the two gains) is taken; the dive goes to the child of lower LP value.
+        """
         is_y = self.lp.cols < self.model.n_nodes
         frac = np.abs(values - np.round(values)) > 1e-6
         for group in (is_y, ~is_y):
             cand = np.flatnonzero(group & frac)
             if len(cand):
-                col = int(cand[np.argmin(np.abs(values[cand] - 0.5))])
-                return col, float(values[col])
-        raise AssertionError("no fractional column to branch on")
+                break
+        else:
+            raise AssertionError("no fractional column to branch on")
+        cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:STRONG_CANDIDATES]]
+        if len(cand) == 1:
+            return int(cand[0]), float(round(values[cand[0]])), False
+        backend, best = self.lp.backend, -1.0
+        pick = int(cand[0]), float(round(values[cand[0]])), False
+        absent = self.absent()
+        for col in cand:
+            child, empty = [], []
+            for v in (0.0, 1.0):
+                backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
+                res = self.solve_lp()
+                empty.append(self._child_is_empty(res, absent))
+                child.append(math.inf if res.status == "infeasible" else
+                             res.objective if res.status == "optimal" else objective)
+            backend.set_bounds(np.array([col]), np.zeros(1), np.ones(1))
+            self.stats["strong_lps"] = self.stats.get("strong_lps", 0) + 2
+            if empty[0] and empty[1]:
+                self.stats["strong_pruned"] = self.stats.get("strong_pruned", 0) + 1
+                return None
+            if empty[0] or empty[1]:
+                self.stats["strong_fixed"] = self.stats.get("strong_fixed", 0) + 1
+                return int(col), 1.0 if empty[0] else 0.0, True
+            gains = [max(min(c, self.ub) - objective, 1e-6 * max(1.0, abs(objective))) for c in child]
+            score = gains[0] * gains[1]
+            if score > best:
+                best, pick = score, (int(col), 0.0 if child[0] <= child[1] else 1.0, False)
+            if self.left() <= 0:
+                break
+        return pick
 
 
 def solve_exact(
@@ -421,6 +497,17 @@ def solve_exact(
     search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
     search.root()
     if not search.proven and search.left() > 0:
+        # the root did not finish: LNS restarts for a small share of the limit, and a root loop
+        # again against a better incumbent (fixing more columns by reduced cost)
+        with _Timer(stats, "heuristic_s"):
+            until = None if time_limit is None else min(deadline, time.perf_counter()
+                                                         + RESTART_SHARE * time_limit)
+            better = restart_tours(problem, search.tour, seed, until)
+        if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
+            stats["restart_gain"] = search.ub - problem.tour_cost(better)
+            search.tour, search.ub = better, problem.tour_cost(better)
+            search.root()
+    if not search.proven and search.left() > 0:
         if isinstance(search.lp.backend, LazyMipBackend):
             search.native_mip()
         else:
@@ -456,6 +543,9 @@ class MipSolver:
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
         self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
                                   core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
+        # compiled or loaded here (a worker's start-up), not in a solve's clock
+        flow.warm_up()
+        lns_kernels.warm_up()
 
     def backend(self, options: MipOptions) -> Backend:
         """A new, empty backend."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,3 +78,42 @@ def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float
     lns = Lns(trials=trials, stop_at_convergence=True)  # its trials, not the whole time limit
     sol = lns.solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
     return problem.to_tour(sol.order, sol.heads)
+
+
+def restart_tours(problem: Problem, tour: np.ndarray, seed: int, deadline: float | None,
+                  trials: int = 3, restarts: int = 3) -> np.ndarray:
+    """The best of ``tour`` and LNS restarts with other seeds: a better incumbent for a search
+    that the root did not finish.
+
+    Parameters
+    ----------
+    problem
+        The priced problem.
+    tour
+        The incumbent (problem node ids).
+    seed
+        The first restart uses ``seed + 1``, the next ``seed + 2``, ...
+    deadline
+        ``time.perf_counter()`` time after which no restart begins and a running one stops
+        (``None``: none).
+    trials
+        Trials of each LNS run (stopped at convergence).
+    restarts
+        Most restarts (the first one runs whatever the deadline).
+
+    Returns
+    -------
+    numpy.ndarray
+        The cheapest tour seen.
+    """
+    lns = Lns(trials=trials, stop_at_convergence=True)
+    best, cost = tour, problem.tour_cost(tour)
+    k = 0
+    while k < restarts and (deadline is None or k == 0 or time.perf_counter() < deadline):
+        k += 1
+        left = None if deadline is None else max(deadline - time.perf_counter(), 1e-3)
+        sol = lns.solve(problem.instance, problem.omega, time_limit=left, seed=seed + k)
+        cand = problem.to_tour(sol.order, sol.heads)
+        if problem.tour_cost(cand) < cost:
+            best, cost = cand, problem.tour_cost(cand)
+    return best

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.model import TOL, ZERO, GtspModel
-from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 #: Capacities are scaled to integers for scipy's max-flow.
 _FLOW_SCALE = 1_000_000
@@ -258,31 +259,17 @@ class _Network:
         g = len(tails)
         rev = np.empty(len(order), dtype=np.int64)
         rev[where] = where[np.concatenate([np.arange(g, 2 * g), np.arange(g)])]
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=size))]).astype(np.int32)
-        return _Network(indptr, cols[order].astype(np.int32), rows[order], rev), where[:g]
-
-    def _reach(self, open_arc: np.ndarray, start: int) -> np.ndarray:
-        size = len(self.indptr) - 1
-        ptr = np.concatenate([[0], np.cumsum(np.bincount(self.row[open_arc], minlength=size))])
-        graph = sp.csr_array((np.ones(int(open_arc.sum()), dtype=np.int32), self.indices[open_arc],
-                              ptr.astype(np.int32)), shape=(size, size))
-        out = np.zeros(size, dtype=bool)
-        out[breadth_first_order(graph, start, directed=True, return_predecessors=False)] = True
-        return out
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=size))]).astype(np.int64)
+        return _Network(indptr, cols[order].astype(np.int64), rows[order].astype(np.int64), rev), where[:g]
 
     def min_cut_sides(self, cap: np.ndarray, source: int, sink: int) -> tuple[float, list[np.ndarray]]:
         """Max-flow value for capacities ``cap`` (per CSR position) and the sink sides of the
         two extreme minimum cuts (masks over nodes)."""
-        size = len(self.indptr) - 1
-        graph = sp.csr_array((cap, self.indices, self.indptr), shape=(size, size))
-        flow = maximum_flow(graph, source, sink, method="dinic")
-        f = flow.flow
-        if not (np.array_equal(f.indptr, self.indptr) and np.array_equal(f.indices, self.indices)):
-            raise AssertionError("max-flow changed the network's layout")  # (every reverse is in)
-        residual = cap - f.data
-        from_source = self._reach(residual > 0, source)
-        to_sink = self._reach(residual[self.rev] > 0, sink)  # reversed arcs
-        return float(flow.flow_value), [~from_source, to_sink]
+        value, f = flow.max_flow(self.indptr, self.indices, self.row, self.rev, cap, source, sink)
+        residual = cap - f
+        from_source = flow.reach(self.indptr, self.indices, self.rev, residual, source, False)
+        to_sink = flow.reach(self.indptr, self.indices, self.rev, residual, sink, True)
+        return float(value), [~from_source, to_sink]
 
 
 def _best_pair(share: np.ndarray) -> tuple[int, int, float]:
@@ -331,10 +318,10 @@ def flow_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     net, where = _Network.build(np.concatenate([a, np.full(k, src), np.arange(k)]),
                                 np.concatenate([b, np.arange(k), np.full(k, snk)]), k + 2)
     e = len(a)
-    base = np.zeros(len(net.indices), dtype=np.int32)
-    base[where[:e]] = base[net.rev[where[:e]]] = np.round(xs * _FLOW_SCALE).astype(np.int32)
+    base = np.zeros(len(net.indices), dtype=np.int64)
+    base[where[:e]] = base[net.rev[where[:e]]] = np.round(xs * _FLOW_SCALE).astype(np.int64)
     at_src, at_snk = where[e:e + k], where[e + k:]
-    ycap = np.round(2 * ys * _FLOW_SCALE).astype(np.int32)
+    ycap = np.round(2 * ys * _FLOW_SCALE).astype(np.int64)
     top = np.zeros(m)
     np.maximum.at(top, clus, ys)
     found: list[Cuts] = []

@@ -1,0 +1,60 @@
+"""The compiled max-flow of the subtour separation against scipy's, on random networks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip import flow
+from gtsp_bench.solvers.exact.mip.separation import _Network
+from scipy.sparse.csgraph import maximum_flow
+
+
+def _random_network(rng: np.random.Generator) -> tuple[_Network, np.ndarray, int]:
+    """A random network (every arc with its reverse) and random integer capacities both ways."""
+    n = int(rng.integers(3, 25))
+    pairs = np.unique(np.sort(rng.integers(0, n, (3 * n, 2)), axis=1), axis=0)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    net, where = _Network.build(pairs[:, 0], pairs[:, 1], n)
+    cap = np.zeros(len(net.indices), dtype=np.int64)
+    cap[where] = rng.integers(0, 10, len(pairs))
+    cap[net.rev[where]] = rng.integers(0, 10, len(pairs))
+    return net, cap, n
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_value_and_both_minimum_cuts_match_scipy(seed):
+    """The flow value equals scipy's; both sink sides hold the sink, not the source, and the
+    arcs from outside into each side carry exactly the flow value (a minimum cut)."""
+    net, cap, n = _random_network(np.random.default_rng(seed))
+    source, sink = 0, n - 1
+    value, sides = net.min_cut_sides(cap, source, sink)
+    graph = sp.csr_array((cap.astype(np.int32), net.indices.astype(np.int32),
+                          net.indptr.astype(np.int32)), shape=(n, n))
+    assert value == maximum_flow(graph, source, sink).flow_value
+    for side in sides:
+        assert side[sink] and not side[source]
+        crossing = ~side[net.row] & side[net.indices]
+        assert cap[crossing].sum() == value
+
+
+def test_flow_is_antisymmetric_and_conserved():
+    """Flow on an arc is minus the flow on its reverse, within capacity, and conserved at every
+    node but the source and the sink."""
+    net, cap, n = _random_network(np.random.default_rng(99))
+    value, f = flow.max_flow(net.indptr, net.indices, net.row, net.rev, cap, 0, n - 1)
+    assert np.array_equal(f[net.rev], -f)
+    assert np.all(f <= cap)
+    out = np.bincount(net.row, weights=f, minlength=n)  # net outflow per node
+    assert out[0] == value and out[n - 1] == -value
+    assert np.all(out[1:n - 1] == 0)
+
+
+def test_reach_forward_and_backward():
+    """On the path 0 -> 1 -> 2 with only forward arcs open: 0 reaches all, 2 is reached by all."""
+    net, where = _Network.build(np.array([0, 1]), np.array([1, 2]), 3)
+    residual = np.zeros(len(net.indices), dtype=np.int64)
+    residual[where] = 1
+    assert flow.reach(net.indptr, net.indices, net.rev, residual, 0, False).tolist() == [True] * 3
+    assert flow.reach(net.indptr, net.indices, net.rev, residual, 2, True).tolist() == [True] * 3
+    assert flow.reach(net.indptr, net.indices, net.rev, residual, 1, False).tolist() == [False, True, True]
