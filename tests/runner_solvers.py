@@ -24,12 +24,12 @@ class Hang:
 
 
 class Slow:
-    """Greedy after a 0.1 s pause: a run long enough to be killed midway."""
+    """Greedy after a 0.3 s pause: a run long enough to be killed midway, even on a loaded machine."""
 
     def solve(self, instance, omega, *, time_limit=None, seed=0):
         from gtsp_bench.solvers.heuristics.greedy import Greedy
 
-        time.sleep(0.1)
+        time.sleep(0.3)
         return Greedy().solve(instance, omega)
 
 

@@ -130,7 +130,7 @@ def test_a_dask_worker_lost_under_a_solve_is_retried_on_another(tmp_path, schedu
 
 
 # ---------------------------------------------------------------------- killed runners
-#: The sweep of the kill tests: 20 t-slow solves (0.1 s each; t-slow is its own reference).
+#: The sweep of the kill tests: 20 t-slow solves (0.3 s each; t-slow is its own reference).
 _SWEEP = {"experiments": "ratio-omega", "ks": "3", "solvers": "t-slow", "reference": "t-slow",
           "n_instances": 2}
 
