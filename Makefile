@@ -88,7 +88,7 @@ bench-sets: $(STAMP)
 SCALE_SETS = --set uav-K20-N20-s1 --set uav-K50-N20-s1 --set uav-K100-N20-s1 --set uav-K200-N20-s1
 SCALE_ARGS ?=
 bench-scale: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench $(SCALE_SETS) --solvers greedy,aco,drl,am,lns \
+	$(BIN)/python -m gtsp_bench.cli bench $(SCALE_SETS) --solvers greedy,aco,drl,am,local,lns \
 		--omegas 0.5 --instances 10 --time-limit 10 --out results/scale $(SCALE_ARGS)
 
 clean:
