@@ -78,6 +78,9 @@ LEARNED_SOLVERS: tuple[tuple[str, str, dict[str, Any]], ...] = (
     ("am", "am", {}),
     ("am heads=paper", "am", {"heads": "paper"}),
     ("am augment=true", "am", {"augment": True}),
+    ("local", "local", {}),
+    ("local heads=paper", "local", {"heads": "paper"}),
+    ("local starts=8", "local", {"starts": 8}),
 )
 _COMMON = ("ks", "solvers", "instances")
 _GTSPLIB = ("gtsplib", "names", "max_nodes", "no_gtsplib")
