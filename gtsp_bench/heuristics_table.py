@@ -38,7 +38,7 @@ from typing import cast
 from gtsp_bench.checks import check_float, check_int, check_omega, check_seed, parse_ks, parse_names
 from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.instance import Instance
-from gtsp_bench.sets import REL_TOL, InstanceSet, read_set_file, resolve_set
+from gtsp_bench.sets import REL_TOL, read_set_file, uav_set
 from gtsp_bench.tables import Row, solve, write_csv
 
 #: The heuristics and peers of the table, in its column order.
@@ -54,8 +54,6 @@ GTSPLIB_GROUPS = (
 AGTSP_GROUP = "GTSPLIB AGTSP"
 #: Cluster counts of the committed UAV sets of the table (20 nodes each).
 UAV_KS = (20, 50, 100, 200)
-#: The committed UAV set of K clusters.
-UAV_SET = "uav-K{k}-N20-s1"
 #: The page and the name of the generated block the table goes to.
 DOCS_PAGE = Path("docs") / "solvers" / "heuristics.md"
 BLOCK = "heuristics-table"
@@ -83,17 +81,6 @@ class TableConfig:
     csv: Path = DEFAULT_CSV
     docs: Path | None = DOCS_PAGE
     instance_dir: Path = Path("instances")
-
-
-def uav_set(k: int, instance_dir: Path = Path("instances")) -> InstanceSet:
-    """The committed UAV set of K clusters (:data:`UAV_SET`).
-
-    Raises
-    ------
-    InputError
-        When there is none for this K (the message lists the committed sets).
-    """
-    return resolve_set(UAV_SET.format(k=k), instance_dir)
 
 
 def reference_for(found: Sequence[Row], row_value: float | None, row_status: str | None) -> tuple[float, str]:

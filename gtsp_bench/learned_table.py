@@ -34,6 +34,7 @@ from gtsp_bench.checks import arg_int, check_int, parse_ks, parse_names, parse_o
 from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.generator import instance_set
 from gtsp_bench.instance import Instance
+from gtsp_bench.suites import DEFAULT_CACHE
 from gtsp_bench.tables import median_wall, write_csv
 
 #: Solvers of the table, in row order (registered names; greedy is the paper's baseline rule).
@@ -44,7 +45,6 @@ LARGE_KS = (20, 50, 100, 200)
 #: Instance-set seed of the small test sets (the learned suite's).
 SMALL_SEED = 5_000
 DEFAULT_CSV = Path("benchmarks") / "out" / "learned-table.csv"
-DEFAULT_CACHE = Path("benchmarks") / "drl_exact.csv"
 COLUMNS = ("solver", "K", "omega", "instances", "mean_gap_pct", "max_gap_pct", "ms_per_instance",
            "reference")
 
@@ -72,11 +72,11 @@ def small_cells(ks: Sequence[int], n: int, omegas: Sequence[float], cache: Path)
 
 def large_cells(ks: Sequence[int], omegas: Sequence[float], instance_dir: Path) -> list[Cell]:
     """Cells of the committed sets ``uav-K{K}-N20-s1``: the instances with a reference row."""
-    from gtsp_bench.sets import read_set_file, resolve_set
+    from gtsp_bench.sets import read_set_file, uav_set
 
     cells = []
     for k in ks:
-        s = resolve_set(f"uav-K{k}-N20-s1", instance_dir)
+        s = uav_set(k, instance_dir)
         loaded = {f.stem: read_set_file(f)[0] for f in s.files}
         for w in omegas:
             rows = [(loaded[stem], r) for (stem, om), r in sorted(s.references.items())

@@ -49,6 +49,8 @@ REFERENCE_COLUMNS = ("instance", "omega", "value", "lower_bound", "status", "sou
 STATUSES = ("optimal", "best_known")
 #: The name of the bundled GTSPLIB set.
 GTSPLIB = "gtsplib"
+#: The committed UAV set of K clusters of 20 nodes (K = 4..10, 20, 50, 100, 200).
+UAV_SET = "uav-K{k}-N20-s1"
 #: Relative tolerance under which two objectives are the same value.
 REL_TOL = 1e-9
 _DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
@@ -292,6 +294,17 @@ def resolve_set(arg: str, instance_dir: str | os.PathLike[str] = "instances") ->
             raise InputError(f"{f.path}: same instance name as {seen[f.stem].name}")
         seen[f.stem] = f.path
     return InstanceSet(path.name, path, files, read_reference(ref_path), ref_path)
+
+
+def uav_set(k: int, instance_dir: str | os.PathLike[str] = "instances") -> InstanceSet:
+    """The committed UAV set of K clusters (:data:`UAV_SET`).
+
+    Raises
+    ------
+    InputError
+        When there is none for this K (the message lists the committed sets).
+    """
+    return resolve_set(UAV_SET.format(k=k), instance_dir)
 
 
 def read_set_file(f: SetFile) -> tuple[object, str, str]:
