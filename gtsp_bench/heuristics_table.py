@@ -19,6 +19,11 @@ CSV's rows (:func:`read_rows`), which the tests check. A cell is the mean gap in
 time; ``*`` when a solve stopped at the time limit; ``refused`` or ``failed`` when no solve of
 the cell gave an answer (a partly answered cell counts only its answers and says ``n/m``).
 Timings are wall-clock, of one run on whatever machine runs it.
+
+The CSV is written after every instance and doubles as the run's progress: a run with the same
+time limit, solver seed and omega keeps the rows already there and solves only the missing ones,
+so an interrupted run resumes; ``--redo LIST`` solves the named solvers again (e.g. ``--redo lns``
+after a change to ``lns``, the other columns kept).
 """
 
 from __future__ import annotations
@@ -60,7 +65,7 @@ BLOCK = "heuristics-table"
 #: The rows of the table in the page (committed with it).
 DEFAULT_CSV = Path("benchmarks") / "heuristics-table.csv"
 COLUMNS = ("group", "instance", "solver", "status", "objective", "reference", "reference_kind",
-           "gap_percent", "runtime_s", "note")
+           "gap_percent", "runtime_s", "note", "omega", "time_limit", "solver_seed")
 _NO_ANSWER = ("failed", "refused")
 
 
@@ -81,6 +86,7 @@ class TableConfig:
     csv: Path = DEFAULT_CSV
     docs: Path | None = DOCS_PAGE
     instance_dir: Path = Path("instances")
+    redo: tuple[str, ...] = ()
 
 
 def reference_for(found: Sequence[Row], row_value: float | None, row_status: str | None) -> tuple[float, str]:
@@ -113,31 +119,66 @@ def _say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def _solve_all(config: TableConfig, group: str, inst: Instance, omega: float | None) -> list[Row]:
+Key = tuple[str, str, str]
+
+
+def _key(row: Row) -> Key:
+    return row.group, row.instance, row.solver
+
+
+def previous_rows(config: TableConfig) -> dict[Key, Row]:
+    """The rows of ``config.csv`` a run with ``config`` keeps: same time limit, solver seed and
+    omega, a solver of the run not named in ``redo`` (none when the file is missing or was
+    written before the CSV recorded these settings)."""
+    if not config.csv.is_file():
+        return {}
+    kept = {}
+    for row, limit, seed in read_table(config.csv):
+        if (limit == config.time_limit and seed == config.solver_seed and row.solver in config.solvers
+                and row.solver not in config.redo
+                and (row.omega is None or row.omega == config.omega)):
+            kept[_key(row)] = row
+    return kept
+
+
+def _solve_all(config: TableConfig, group: str, inst: Instance, omega: float | None,
+               done: dict[Key, Row]) -> list[Row]:
     rows = []
     for s in config.solvers:
-        r = solve(group, inst, omega, s, config.time_limit, config.solver_seed)
+        kept = done.get((group, inst.name, s))
+        r = kept or solve(group, inst, omega, s, config.time_limit, config.solver_seed)
         what = r.note if r.status in _NO_ANSWER else f"{r.objective:.6g} in {r.runtime_s:.2f} s"
-        _say(f"  {inst.name} {s}: {r.status} {what}")
+        _say(f"  {inst.name} {s}: {r.status} {what}" + (" (kept from the CSV)" if kept else ""))
         rows.append(r)
     return rows
 
 
 def run_table(config: TableConfig) -> list[Row]:
-    """Every solver on every instance of the table; each row with its reference."""
+    """Every solver on every instance of the table; each row with its reference. The CSV is
+    rewritten after each instance (this run's rows, then the kept rows not reached yet)."""
+    done = previous_rows(config)
+    if done:
+        _say(f"{len(done)} solve(s) kept from {config.csv}")
     rows: list[Row] = []
+
+    def save() -> None:
+        seen = {_key(r) for r in rows}
+        write_csv_rows(config, rows + [r for k, r in done.items() if k not in seen])
+
     if config.gtsplib:
         for group, inst, best in gtsplib_instances(config):
-            rows += [r.against(best, "best known") for r in _solve_all(config, group, inst, None)]
+            rows += [r.against(best, "best known") for r in _solve_all(config, group, inst, None, done)]
+            save()
     for k in config.uav_ks:
         chosen = uav_set(k, config.instance_dir)
         for f in chosen.files[:config.uav_instances]:
             inst = cast(Instance, read_set_file(f)[0])
-            found = _solve_all(config, f"UAV K={k}", inst, config.omega)
+            found = _solve_all(config, f"UAV K={k}", inst, config.omega, done)
             ref = chosen.references.get((f.stem, config.omega))
             value, kind = reference_for(found, None if ref is None else ref.value,
                                         None if ref is None else ref.status)
             rows += [r.against(value, kind) for r in found]
+            save()
     return rows
 
 
@@ -188,14 +229,20 @@ def block_text(rows: Sequence[Row], config: TableConfig, command: str, wall_s: f
             f"large).\n\n{listing}")
 
 
+def write_csv_rows(config: TableConfig, rows: Sequence[Row]) -> Path:
+    """The CSV of ``rows``, written atomically, with the run's settings on every row; its path."""
+    return write_csv(config.csv, COLUMNS, (
+        [r.group, r.instance, r.solver, r.status, repr(r.objective), repr(r.reference),
+         r.reference_kind, f"{r.gap:.6f}" if math.isfinite(r.gap) else "", f"{r.runtime_s:.4f}",
+         r.note, "" if r.omega is None else repr(r.omega), repr(config.time_limit),
+         config.solver_seed] for r in rows))
+
+
 def write_outputs(rows: Sequence[Row], config: TableConfig, command: str, wall_s: float) -> Path:
     """The CSV rows and, when ``config.docs`` is set, the page's generated block; the CSV path."""
     from gtsp_bench.report import refresh_blocks
 
-    path = write_csv(config.csv, COLUMNS, (
-        [r.group, r.instance, r.solver, r.status, repr(r.objective), repr(r.reference),
-         r.reference_kind, f"{r.gap:.6f}" if math.isfinite(r.gap) else "", f"{r.runtime_s:.4f}",
-         r.note] for r in rows))
+    path = write_csv_rows(config, rows)
     if config.docs is not None:
         if not config.docs.is_file():
             raise InputError(f"{config.docs}: no such page for the table")
@@ -203,17 +250,32 @@ def write_outputs(rows: Sequence[Row], config: TableConfig, command: str, wall_s
     return path
 
 
-def read_rows(path: Path) -> list[Row]:
-    """The rows of a CSV that :func:`write_outputs` wrote, in file order."""
+def read_table(path: Path) -> list[tuple[Row, float, int]]:
+    """The rows of a CSV that :func:`write_outputs` wrote, in file order, each with the time limit
+    and solver seed it was solved with (NaN and -1 in a CSV older than those columns)."""
     import csv
 
-    def number(text: str) -> float:
+    def number(text: str | None) -> float:
         return float(text) if text else math.nan
 
-    with Path(path).open(newline="") as f:
-        return [Row(r["group"], r["instance"], None, r["solver"], r["status"], number(r["objective"]),
-                    runtime_s=number(r["runtime_s"]), note=r["note"], reference=number(r["reference"]),
-                    reference_kind=r["reference_kind"]) for r in csv.DictReader(f)]
+    out = []
+    try:
+        with Path(path).open(newline="") as f:
+            for r in csv.DictReader(f):
+                row = Row(r["group"], r["instance"], number(r.get("omega")) if r.get("omega") else None,
+                          r["solver"], r["status"], number(r["objective"]),
+                          runtime_s=number(r["runtime_s"]), note=r["note"], reference=number(r["reference"]),
+                          reference_kind=r["reference_kind"])
+                out.append((row, number(r.get("time_limit")), int(r.get("solver_seed") or -1)))
+    except (KeyError, ValueError, TypeError, csv.Error, UnicodeDecodeError) as e:
+        raise InputError(f"{path}: not a CSV of this table ({type(e).__name__}: {e}); "
+                         "give another --csv or remove it") from None
+    return out
+
+
+def read_rows(path: Path) -> list[Row]:
+    """The rows of a CSV that :func:`write_outputs` wrote, in file order."""
+    return [row for row, _, _ in read_table(path)]
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -248,6 +310,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--docs", default=str(DOCS_PAGE), metavar="PAGE",
                    help=f"page whose '{BLOCK}' block gets the table (default: {DOCS_PAGE})")
     p.add_argument("--no-docs", action="store_true", help="leave the documentation alone")
+    p.add_argument("--redo", default="", metavar="LIST",
+                   help="solvers to solve again although the CSV has their rows for these settings "
+                        "(default: none; the CSV's rows of the same time limit, seed and omega are "
+                        "kept, so an interrupted run resumes)")
     return p
 
 
@@ -267,6 +333,7 @@ def make_config(args: argparse.Namespace) -> TableConfig:
         agtsp=not args.no_agtsp, max_nodes=check_int("--max-nodes", args.max_nodes, 1),
         csv=Path(args.csv), docs=None if args.no_docs else Path(args.docs),
         instance_dir=Path(args.instance_dir),
+        redo=parse_names(args.redo, "solver", solvers) if args.redo else (),
     )
 
 

@@ -128,3 +128,74 @@ def test_bad_options_are_one_line(tmp_path, capsys):
     assert ht.main(["--docs", str(tmp_path / "none.md")]) == 2
     err = capsys.readouterr().err
     assert err == f"gtsp-bench: error: {tmp_path / 'none.md'}: no such page for the table\n"
+
+
+def _tiny(tmp_path, *extra):
+    return ["--time-limit", "1", "--per-group", "1", "--max-nodes", "14", "--no-agtsp", "-K", "4",
+            "--uav-instances", "1", "--solvers", "greedy,greedy+ls", "--csv", str(tmp_path / "t.csv"),
+            "--no-docs", "--instance-dir", str(REPO / "instances"), *extra]
+
+
+def _csv(path):
+    with path.open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_a_rerun_keeps_the_rows_of_the_same_settings_and_redo_solves_again(tmp_path, capsys):
+    """Rows of the same time limit, seed and omega are kept (a marked objective survives the
+    re-run); --redo re-solves the named solver only; another time limit keeps none."""
+    path = tmp_path / "t.csv"
+    assert ht.main(_tiny(tmp_path)) == 0
+    first = _csv(path)
+    assert len(first) == 4 and {r["time_limit"] for r in first} == {"1.0"}
+    marked = [dict(r, objective=str(float(r["objective"]) + 7.0)) for r in first]
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=ht.COLUMNS, lineterminator="\n")
+        w.writeheader()
+        w.writerows(marked)
+    capsys.readouterr()
+    assert ht.main(_tiny(tmp_path)) == 0
+    assert "4 solve(s) kept from" in capsys.readouterr().err
+    assert [r["objective"] for r in _csv(path)] == [r["objective"] for r in marked]
+    assert ht.main(_tiny(tmp_path, "--redo", "greedy")) == 0
+    again = {(r["instance"], r["solver"]): r["objective"] for r in _csv(path)}
+    for r, m in zip(first, marked, strict=True):
+        expect = r["objective"] if r["solver"] == "greedy" else m["objective"]
+        assert again[(r["instance"], r["solver"])] == expect
+    capsys.readouterr()
+    assert ht.main(_tiny(tmp_path, "--time-limit", "2")) == 0
+    assert "kept from" not in capsys.readouterr().err
+    assert {r["time_limit"] for r in _csv(path)} == {"2.0"}
+
+
+def test_an_interrupted_run_leaves_its_finished_instances(tmp_path, monkeypatch):
+    """The CSV is rewritten after each instance: a run stopped in the second instance leaves the
+    first one's rows, which the next run keeps."""
+    calls = []
+    real = ht.solve
+
+    def stop_in_the_uav_set(group, *args):
+        calls.append(group)
+        if group.startswith("UAV"):
+            raise KeyboardInterrupt
+        return real(group, *args)
+
+    monkeypatch.setattr(ht, "solve", stop_in_the_uav_set)
+    with pytest.raises(KeyboardInterrupt):
+        ht.main(_tiny(tmp_path))
+    assert [(r["instance"], r["solver"]) for r in _csv(tmp_path / "t.csv")] == [
+        ("3burma14", "greedy"), ("3burma14", "greedy+ls")]
+    monkeypatch.setattr(ht, "solve", real)
+    calls.clear()
+    assert ht.main(_tiny(tmp_path)) == 0
+    assert len(_csv(tmp_path / "t.csv")) == 4
+
+
+def test_a_csv_of_something_else_is_refused(tmp_path, capsys):
+    """--csv naming a file that is not this table's CSV: one line, exit 2, the file untouched."""
+    other = tmp_path / "t.csv"
+    other.write_text("a,b\n1,2\n")
+    assert ht.main(_tiny(tmp_path)) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"gtsp-bench: error: {other}: not a CSV of this table") and err.count("\n") == 1
+    assert other.read_text() == "a,b\n1,2\n"
