@@ -131,8 +131,8 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
     g.add_argument("--exact-time-limit", type=arg_float, metavar="S",
                    help="heuristics: seconds per exact reference solve (default: 120)")
     g.add_argument("--gtsplib", metavar="DIR",
-                   help="folder with best_known.csv and the .gtsp(.gz) files (default: "
-                   "$GTSP_BENCH_GTSPLIB, else the repository's instances/gtsplib)")
+                   help="folder with a best_known.csv in the library's format and the .gtsp(.gz) files "
+                   "(default: $GTSP_BENCH_GTSPLIB, else the repository's instances/gtsplib)")
     g.add_argument("--names", metavar="LIST",
                    help="GTSPLIB instances, comma-separated (default: the five samples, or all of "
                         "--gtsplib DIR; quick: a few)")

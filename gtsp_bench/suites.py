@@ -44,12 +44,11 @@ from gtsp_bench.checks import (
 )
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
-from gtsp_bench.gtsplib import SAMPLES
+from gtsp_bench.gtsplib import SAMPLES, Reference, parse_best_known
 from gtsp_bench.gtsplib import folder as gtsplib_folder
 from gtsp_bench.instance import Instance
 from gtsp_bench.tables import (
     Row,
-    best_known,
     count_failed,
     gap_time_cell,
     grid_header,
@@ -272,21 +271,30 @@ def _say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def _gtsplib_samples(config: SuiteConfig) -> list[tuple[Instance, dict[str, str]]]:
-    """The GTSPLIB samples the config asks for, with their ``best_known.csv`` rows."""
+def _gtsplib_samples(config: SuiteConfig) -> list[tuple[Instance, Reference]]:
+    """The GTSPLIB samples the config asks for, with their ``best_known.csv`` rows (none, with a
+    note on stderr, when the folder has no such table)."""
     from gtsp_bench.io import read_instance
 
     if config.gtsplib is None:
         return []
+    table = config.gtsplib / "best_known.csv"
+    if not table.is_file():
+        _say(f"no {table}: GTSPLIB skipped")
+        return []
+    try:
+        refs = parse_best_known(table.read_text(encoding="utf-8"))
+    except InputError as e:
+        raise InputError(f"{table}: {e}") from None
     wanted, limit = config.names, config.max_nodes
-    rows = best_known(config.gtsplib, lambda r: (limit is None or int(r["nodes"]) <= limit)
-                      and (not wanted or r["name"] in wanted) and r.get("type") != "AGTSP")
+    picked = [r for r in refs.values() if (limit is None or r.nodes <= limit)
+              and (not wanted or r.name in wanted) and r.type != "AGTSP"]
 
     def file(name: str) -> Path:
         gz = config.gtsplib / f"{name}.gtsp.gz"
         return gz if gz.is_file() else config.gtsplib / f"{name}.gtsp"
 
-    return [(read_instance(file(r["name"])), r) for r in rows]
+    return [(read_instance(file(r.name)), r) for r in picked]
 
 
 # ---------------------------------------------------------------------- exact
@@ -320,7 +328,7 @@ def _exact_rows(c: SuiteConfig) -> tuple[list[Row], list[Row], dict[str, tuple[i
     lib: list[Row] = []
     info = {}
     for inst, row in _gtsplib_samples(c):
-        info[inst.name] = (int(row["clusters"]), int(row["nodes"]), float(row["best_known"]), row["status"])
+        info[inst.name] = (row.clusters, row.nodes, row.value, row.status)
         for solver in c.solvers:
             if solver == "dp" and inst.n_clusters > c.dp_max_k:
                 continue
@@ -430,8 +438,8 @@ def _heuristics_rows(c: SuiteConfig) -> list[Row]:
             out += [r.against(ref, kind) for r in found]
             _say(f"  {inst.name}: reference {ref:.4f} ({kind})")
     for inst, row in _gtsplib_samples(c):
-        kind = "optimum (literature)" if row["status"] == "optimal" else "best known"
-        out += [r.against(float(row["best_known"]), kind) for r in _solved(c, "GTSPLIB", inst, None)]
+        kind = "optimum (literature)" if row.status == "optimal" else "best known"
+        out += [r.against(row.value, kind) for r in _solved(c, "GTSPLIB", inst, None)]
         _say(f"  {inst.name}: done")
     return out
 

@@ -87,17 +87,6 @@ def count_failed(rows: Sequence[Row]) -> int:
     return failed
 
 
-def best_known(folder: Path, keep: Callable[[dict[str, str]], bool]) -> list[dict[str, str]]:
-    """The rows of ``folder/best_known.csv`` that ``keep`` accepts (name, clusters, nodes,
-    best_known, status); none, with a note on stderr, when the folder has no such table."""
-    table = folder / "best_known.csv"
-    if not table.is_file():
-        print(f"no {table}: GTSPLIB skipped", file=sys.stderr)
-        return []
-    with table.open(newline="") as f:
-        return [r for r in csv.DictReader(f) if keep(r)]
-
-
 def time_to_proof_cell(rows: Sequence[Row], limit: float) -> str:
     """Median time to a proven optimum (an unproven solve counts as above the limit) and how
     many were proven, e.g. ``   0.23s 5/5`` or ``>    60s 2/5``."""

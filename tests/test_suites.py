@@ -151,7 +151,9 @@ def test_exact_sample_table(tmp_path, capsys):
         "NAME : 3tiny4\nTYPE : GTSP\nDIMENSION : 4\nGTSP_SETS : 3\nEDGE_WEIGHT_TYPE : EUC_2D\n"
         "NODE_COORD_SECTION\n1 0 0\n2 3 0\n3 3 4\n4 10 10\n"
         "GTSP_SET_SECTION\n1 1 -1\n2 2 -1\n3 3 4 -1\nEOF\n")  # best tour 1-2-3: 3 + 4 + 5
-    (lib / "best_known.csv").write_text("name,clusters,nodes,best_known,status\n3tiny4,3,4,12,optimal\n")
+    (lib / "best_known.csv").write_text(
+        "name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
+        "3tiny4,3,4,12,optimal,GTSP,EUC_2D,,\n")
     argv = ["bench", "--suite", "exact", "--no-generated", "--solvers", "dp", "--gtsplib", str(lib),
             "--out", str(tmp_path)]
     assert main(argv) == 0
@@ -160,6 +162,21 @@ def test_exact_sample_table(tmp_path, capsys):
     assert line.split()[3:6] == ["dp", "optimal", "12"] and " yes " in line
     assert main([*argv, "--dp-max-k", "2"]) == 0
     assert "3tiny4" not in capsys.readouterr().out and _rows(tmp_path / "exact.csv") == []
+
+
+def test_sample_folder_without_or_with_a_bad_table(tmp_path, capsys):
+    """No best_known.csv: GTSPLIB is skipped with a note; one in an old or damaged format: one
+    line naming the file and the problem, exit 2."""
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    argv = ["bench", "--suite", "exact", "--no-generated", "--solvers", "dp", "--gtsplib", str(lib),
+            "--out", str(tmp_path / "out")]
+    assert main(argv) == 0
+    assert f"no {lib / 'best_known.csv'}: GTSPLIB skipped" in capsys.readouterr().err
+    (lib / "best_known.csv").write_text("name,clusters,nodes,best_known,status\n3tiny4,3,4,12,optimal\n")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err == f"gtsp-bench: error: {lib / 'best_known.csv'}: missing column 'type'\n"
 
 
 # ---------------------------------------------------------------------- heuristics

@@ -12,7 +12,6 @@ from gtsp_bench.generator import instance_set
 from gtsp_bench.registry import Solution, register_solver
 from gtsp_bench.tables import (
     Row,
-    best_known,
     count_failed,
     gap_time_cell,
     grid_header,
@@ -94,14 +93,9 @@ def test_median_wall_returns_last_result():
         median_wall(lambda: None, 0)
 
 
-def test_write_csv_and_best_known(tmp_path, capsys):
-    """The CSV gets its folder, header and rows (no temporary file left); best_known filters
-    rows and reports a missing table on stderr."""
+def test_write_csv(tmp_path):
+    """The CSV gets its folder, header and rows (no temporary file left)."""
     path = write_csv(tmp_path / "a" / "b.csv", ["x", "y"], [[1, "p,q"], [2, ""]])
     with path.open(newline="") as f:
         assert list(csv.reader(f)) == [["x", "y"], ["1", "p,q"], ["2", ""]]
     assert [p.name for p in path.parent.iterdir()] == ["b.csv"]
-    (tmp_path / "best_known.csv").write_text("name,nodes\nsmall,10\nbig,500\n")
-    assert [r["name"] for r in best_known(tmp_path, lambda r: int(r["nodes"]) < 100)] == ["small"]
-    assert best_known(tmp_path / "none", lambda r: True) == []
-    assert "best_known.csv: " in capsys.readouterr().err
