@@ -121,3 +121,22 @@ def test_iterate_with_a_window_gives_tours():
                                         near, cluster_of, 1e-9, True, 2)
             assert _feasible(p, new)
             assert cost == pytest.approx(p.tour_cost(new), rel=1e-12)
+
+
+@pytest.mark.parametrize("how", range(len(kernels.REMOVALS)))
+def test_remove_near_takes_k_clusters(how):
+    """Each large-cycle removal marks exactly k positions (a segment: consecutive ones), and
+    putting them back gives a tour."""
+    p, start, cluster_of = _problem(40, 2, 4)
+    near = kernels.neighbours(p.edge_cost, start, 6)
+    t = _random_tour(p, np.random.default_rng(how))
+    kernels.seed(how)
+    for k in (1, 3, 7):
+        drop = lns_window.remove_near(t, k, how, p.edge_cost, p.node_cost, near, cluster_of)
+        assert drop.sum() == k
+        new = kernels.insert(t[~drop], cluster_of[t[drop]], 0, 0.0, p.edge_cost, p.node_cost, start,
+                             near, cluster_of)
+        assert _feasible(p, new)
+        if how == 2:
+            idx = np.flatnonzero(drop)
+            assert all((i + 1) % len(t) in idx or (i - 1) % len(t) in idx for i in idx) or k == 1

@@ -56,6 +56,8 @@ REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.RE
 MAX_HEAT = 8.0
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
+#: With ``fit_trials``, a trial still runs at least this many iterations per cluster.
+FIT_FLOOR = 5
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
 
@@ -78,6 +80,7 @@ class LnsSettings:
     restart_after: int = 2
     reopt_window: int | None = None
     fit_to_time: bool = True
+    fit_trials: int = 32
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -105,6 +108,7 @@ class LnsSettings:
         if self.reopt_window is not None:
             check_int("reopt_window", self.reopt_window, 0)
         check_bool("fit_to_time", self.fit_to_time)
+        check_int("fit_trials", self.fit_trials, 1)
 
     @property
     def hottest(self) -> float:
@@ -231,9 +235,13 @@ class _Search:
                 if fit and not ended and done > 0:
                     # The trial ends with the budget, cooled, when it cannot run all its iterations:
                     # its length is the iterations the rate so far leaves time for (at most its own).
+                    # And at least fit_trials trials fit in the budget (short budgets: more, shorter
+                    # trials, so that cold restarts come in time).
                     now = time.perf_counter()
-                    left = done / max(now - clock0, 1e-9) * max(0.0, deadline - now)
-                    settings[0] = min(iterations, max(counts[0] + 1, int(counts[0] + left)))
+                    rate = done / max(now - clock0, 1e-9)
+                    left = rate * max(0.0, deadline - now)
+                    share = max(FIT_FLOOR * n, rate * (deadline - clock0) / s.fit_trials)
+                    settings[0] = min(iterations, max(counts[0] + 1, int(min(counts[0] + left, share))))
                     ended = counts[0] >= settings[0]
                 if ended:
                     break
@@ -302,6 +310,10 @@ class Lns:
         Without ``stop_at_convergence``, a trial that the time left cannot finish (at the rate of
         iterations so far) is shortened to end, cooled, at the time limit; its length is
         re-estimated between the compiled chunks.
+    fit_trials
+        With ``fit_to_time``, trials are also short enough (at the rate so far) for this many to
+        fit in the time limit, but at least ``FIT_FLOOR`` iterations per cluster (>= 1, default
+        32): on a short budget, more and shorter trials, so that the cold restarts come in time.
     """
 
     asymmetric = True
@@ -311,12 +323,12 @@ class Lns:
         remove_fraction: float = 0.3, max_removals: int | None = None, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
-        reopt_window: int | None = None, fit_to_time: bool = True,
+        reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
-                                    fit_to_time)
+                                    fit_to_time, fit_trials)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

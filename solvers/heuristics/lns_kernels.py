@@ -22,7 +22,7 @@ from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported
     tour_cost,
     two_opt,
 )
-from gtsp_bench.solvers.heuristics.lns_window import local_search_window
+from gtsp_bench.solvers.heuristics.lns_window import local_search_window, remove_near
 from numba import njit
 
 #: Removal operators, by index.
@@ -181,9 +181,13 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
             tol: float, symmetric: bool, half: int) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
-    (waking the inserted clusters; with ``half`` > 0 the windowed re-opt of
-    :mod:`gtsp_bench.solvers.heuristics.lns_window`, else the full one)."""
-    drop = remove(t, k, removal, edge, node)
+    (waking the inserted clusters). With ``half`` > 0, the large-cycle path of
+    :mod:`gtsp_bench.solvers.heuristics.lns_window`: its removals (when ``8 k`` is below the
+    cycle's length) and its windowed re-opt; else the full re-opt."""
+    if half > 0 and 8 * k < len(t):
+        drop = remove_near(t, k, removal, edge, node, near, cluster_of)
+    else:
+        drop = remove(t, k, removal, edge, node)
     partial = t[~drop]
     clusters = cluster_of[t[drop]]
     new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
@@ -336,6 +340,8 @@ def warm_up() -> None:
         for half in (0, 1):
             iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True,
                     half)
+    for how in range(len(REMOVALS)):
+        remove_near(t, 1, how, edge, node, near, cluster_of)
     cur = t.copy()
     run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
               np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1]),

@@ -8,6 +8,9 @@ shortest path between the fixed heads just outside each window (:func:`reopt_win
 "changed" when a move woke it (a fourth row of don't-look bits, set with the other three). When the
 windows cover nearly the whole cycle (the first local search, from a new tour) the full re-opt
 runs instead. An iteration's cost then grows with the clusters it removed, not with the cycle.
+
+The removals (:func:`remove_near`) likewise look at about ``8 k`` clusters for ``k`` removals, not
+at all of them.
 """
 
 from __future__ import annotations
@@ -155,3 +158,78 @@ def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start
                 cost = new_cost
                 continue
         return tour_cost(t, edge, node)
+
+
+@njit(cache=True)
+def _distinct_positions(n: int, count: int, mark: np.ndarray) -> np.ndarray:
+    """``count`` distinct random positions below ``n`` (``count`` well below ``n``), marked."""
+    out = np.empty(count, dtype=np.int64)
+    got = 0
+    while got < count:
+        i = np.random.randint(0, n)
+        if not mark[i]:
+            mark[i] = True
+            out[got] = i
+            got += 1
+    return out
+
+
+@njit(cache=True)
+def remove_near(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray,
+                near: np.ndarray, cluster_of: np.ndarray) -> np.ndarray:
+    """The removals of :func:`gtsp_bench.solvers.heuristics.lns_kernels.remove` on a large cycle
+    (``8 k < len(t)``), without a pass over all of it: **random** positions drawn one by one;
+    **worst** among ``8 k`` random positions (the same randomised saving); a **segment**; and
+    **distance**: the heads nearest a random one among its neighbour clusters and theirs (when
+    they are fewer than ``k``, the nearest of all). A mask of the positions to take out."""
+    n = len(t)
+    drop = np.zeros(n, dtype=np.bool_)
+    if how == 0:  # random
+        _distinct_positions(n, k, drop)
+    elif how == 1:  # worst: largest saving, each scaled by a random factor in [0.5, 1.5)
+        mark = np.zeros(n, dtype=np.bool_)
+        cand = _distinct_positions(n, min(n, 8 * k), mark)
+        key = np.empty(len(cand))
+        for x in range(len(cand)):
+            i = cand[x]
+            a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
+            key[x] = -(edge[a, u] + node[u] + edge[u, b] - edge[a, b]) * (0.5 + np.random.random())
+        order = np.argsort(key)
+        for x in range(k):
+            drop[cand[order[x]]] = True
+    elif how == 2:  # segment
+        s = np.random.randint(0, n)
+        for i in range(k):
+            drop[(s + i) % n] = True
+    else:  # distance: the heads nearest a random one, among its neighbours and theirs
+        s = np.random.randint(0, n)
+        pos = np.empty(n, dtype=np.int64)
+        for i in range(n):
+            pos[cluster_of[t[i]]] = i
+        mark = np.zeros(n, dtype=np.bool_)
+        mark[s] = True
+        cand = np.empty(near.shape[1] * (near.shape[1] + 1), dtype=np.int64)
+        got = 0
+        c = cluster_of[t[s]]
+        for w in range(near.shape[1]):
+            d = near[c, w]
+            for e in range(-1, near.shape[1]):
+                q = pos[d] if e < 0 else pos[near[d, e]]
+                if not mark[q]:
+                    mark[q] = True
+                    cand[got] = q
+                    got += 1
+        if got < k:
+            got = 0
+            cand = np.empty(n - 1, dtype=np.int64)
+            for i in range(n):
+                if i != s:
+                    cand[got] = i
+                    got += 1
+        key = np.empty(got)
+        for x in range(got):
+            key[x] = edge[t[s], t[cand[x]]]
+        order = np.argsort(key)
+        for x in range(k):
+            drop[cand[order[x]]] = True
+    return drop
