@@ -257,10 +257,7 @@ def pair_distances(a: np.ndarray, b: np.ndarray, edge_weight_type: str) -> np.nd
         return _geo_distances(a, b)
     if edge_weight_type == "GEOM":
         return _geom_distances(a, b)
-    d = a[..., 0] - b[..., 0]  # dx * dx + dy * dy: the same sums as ((a - b) ** 2).sum(axis=-1),
-    d2 = d * d  # about 6 x faster on a matrix's rows (a reduction over an axis of 2 is slow)
-    d = a[..., 1] - b[..., 1]
-    d2 = d2 + d * d
+    d2 = ((a - b) ** 2).sum(axis=-1)
     if edge_weight_type == "EUCLIDEAN":
         return np.sqrt(d2)
     if edge_weight_type == "EUC_2D":
