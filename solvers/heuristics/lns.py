@@ -57,7 +57,7 @@ MAX_HEAT = 8.0
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
 #: With ``fit_trials``, a trial still runs at least this many iterations per cluster.
-FIT_FLOOR = 5
+FIT_FLOOR = 10
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
 
