@@ -19,7 +19,9 @@ after ``iterations`` iterations or ``patience`` without a new trial best (by def
 ``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
 hotter start); the first trial starts from the greedy tour improved by the local search, later ones
 from the best tour so far, and a trial that did not improve it makes the next one hotter
-(temperatures and noise doubled, up to ``MAX_HEAT`` times).
+(temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
+its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
+windowed re-opt and sampled removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`.
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
