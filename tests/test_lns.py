@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gtsp_bench.solvers.heuristics.lns import LnsSettings
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
@@ -168,6 +168,9 @@ def test_operators_are_all_used():
     ({"max_removals": 0}, "max_removals must be an integer >= 1"),
     ({"stop_at_convergence": "yes"}, "stop_at_convergence must be true or false"),
     ({"restart_after": -1}, "restart_after must be an integer >= 0"),
+    ({"reopt_window": -1}, "reopt_window must be an integer >= 0"),
+    ({"fit_to_time": 1}, "fit_to_time must be true or false"),
+    ({"fit_trials": 0}, "fit_trials must be an integer >= 1"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -214,3 +217,40 @@ def test_default_budget_scales_with_size():
     assert s.max_removals_for(400) == 100 and s.max_removals_for(401) == 25
     assert LnsSettings(max_removals=7).max_removals_for(5000) == 7
     assert np.all(np.diff([s.iterations_for(n) for n in range(1, 200)]) >= 0)
+
+
+def test_large_cycles_default_to_the_windowed_reopt():
+    """The windowed re-opt is the default only above LARGE clusters; a given width wins."""
+    assert LnsSettings().reopt_window_for(LARGE) == 0 and LnsSettings().reopt_window_for(LARGE + 1) == 4
+    assert LnsSettings(reopt_window=2).reopt_window_for(10) == 2
+    assert LnsSettings(reopt_window=0).reopt_window_for(5000) == 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_windowed_search_never_below_dp_optimum(seed):
+    """The large-cycle path forced on K = 12 (windowed re-opt, the removals that sample): a
+    valid tour, never below the DP's proven optimum, and its objective is the tour's energy."""
+    inst = generate_instance(12, 3, seed=20 + seed)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", reopt_window=1), inst, 0.5, seed=seed, time_limit=0.3)
+    assert sorted(r.order) == list(range(12))
+    assert r.objective >= optimum - 1e-9 * optimum
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+
+
+def test_fitted_trials_leave_converging_runs_alone():
+    """fit_to_time and fit_trials act only on a search that uses its time limit: with
+    stop_at_convergence the run is the same whatever their values."""
+    inst = generate_instance(14, 4, seed=2)
+    runs = [run_solver(get_solver("lns", fit_to_time=f, fit_trials=t, **CONVERGE), inst, 0.4, seed=1)
+            for f, t in ((True, 32), (False, 1), (True, 2))]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+def test_fitted_trials_fill_a_short_budget():
+    """A time-limited run whose trials would not fit its budget makes at least several shorter
+    ones (the fitted length), and more with a larger fit_trials."""
+    inst = generate_instance(14, 4, seed=6)
+    few = run_solver(get_solver("lns", iterations=10**6, fit_trials=1), inst, 0.4, seed=1, time_limit=0.4)
+    many = run_solver(get_solver("lns", iterations=10**6, fit_trials=64), inst, 0.4, seed=1, time_limit=0.4)
+    assert few.stats["trials"] <= 2 < 10 <= many.stats["trials"]

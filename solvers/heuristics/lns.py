@@ -19,7 +19,9 @@ after ``iterations`` iterations or ``patience`` without a new trial best (by def
 ``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
 hotter start); the first trial starts from the greedy tour improved by the local search, later ones
 from the best tour so far, and a trial that did not improve it makes the next one hotter
-(temperatures and noise doubled, up to ``MAX_HEAT`` times).
+(temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
+its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
+windowed re-opt and sampled removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`.
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -56,6 +58,8 @@ REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.RE
 MAX_HEAT = 8.0
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
+#: With ``fit_trials``, a trial still runs at least this many iterations per cluster.
+FIT_FLOOR = 10
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
 
@@ -76,6 +80,9 @@ class LnsSettings:
     neighbours: int | None = None
     stop_at_convergence: bool = False
     restart_after: int = 2
+    reopt_window: int | None = None
+    fit_to_time: bool = True
+    fit_trials: int = 32
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -100,6 +107,10 @@ class LnsSettings:
         if self.neighbours is not None:
             check_int("neighbours", self.neighbours, 1)
         check_int("restart_after", self.restart_after, 0)
+        if self.reopt_window is not None:
+            check_int("reopt_window", self.reopt_window, 0)
+        check_bool("fit_to_time", self.fit_to_time)
+        check_int("fit_trials", self.fit_trials, 1)
 
     @property
     def hottest(self) -> float:
@@ -128,6 +139,14 @@ class LnsSettings:
         if self.max_removals is not None:
             return self.max_removals
         return 100 if n <= LARGE else 25
+
+    def reopt_window_for(self, n: int) -> int:
+        """Half-width of an iteration's windowed re-opt for ``n`` clusters (default 0, the full
+        re-opt, up to ``LARGE`` clusters; 4 above: there a full re-opt per local search round cost
+        more than the rest of the iteration)."""
+        if self.reopt_window is not None:
+            return self.reopt_window
+        return 0 if n <= LARGE else 4
 
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
@@ -183,6 +202,8 @@ class _Search:
         # Trials restart from the base: the best tour, or after a cold restart that run's best.
         base, base_cost, fails = best.copy(), best_cost, 0
         cold = s.restart_after > 0 and not s.stop_at_convergence and deadline is not None
+        fit = s.fit_to_time and not s.stop_at_convergence and deadline is not None
+        clock0 = time.perf_counter()
         while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
@@ -197,7 +218,7 @@ class _Search:
             mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)])) * heat
             settings = np.array([iterations, patience, s.hottest * mean_edge,
                                  s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
-                                 s.reaction], dtype=np.float64)
+                                 s.reaction, s.reopt_window_for(n)], dtype=np.float64)
             costs = np.array([base_cost, best_cost, base_cost])
             counts = np.array([0, 0, done, best_at], dtype=np.int64)
             while True:
@@ -213,6 +234,17 @@ class _Search:
                 elif spent > 2 * CHUNK_SECONDS:
                     steps = max(1, steps // 2)
                 best_cost, done, best_at = float(costs[1]), int(counts[2]), int(counts[3])
+                if fit and not ended and done > 0:
+                    # The trial ends with the budget, cooled, when it cannot run all its iterations:
+                    # its length is the iterations the rate so far leaves time for (at most its own).
+                    # And at least fit_trials trials fit in the budget (short budgets: more, shorter
+                    # trials, so that cold restarts come in time).
+                    now = time.perf_counter()
+                    rate = done / max(now - clock0, 1e-9)
+                    left = rate * max(0.0, deadline - now)
+                    share = max(FIT_FLOOR * n, rate * (deadline - clock0) / s.fit_trials)
+                    settings[0] = min(iterations, max(counts[0] + 1, int(min(counts[0] + left, share))))
+                    ended = counts[0] >= settings[0]
                 if ended:
                     break
                 if is_past(deadline):
@@ -272,6 +304,18 @@ class Lns:
         Without ``stop_at_convergence``, after this many trials in a row that did not improve
         the tour they started from, the next starts from a fresh random-insertion tour (GLNS's
         cold restart; later trials start from that run's best). 0: never.
+    reopt_window
+        An iteration's local search re-opts only the heads within this many positions of a
+        changed cluster (:mod:`gtsp_bench.solvers.heuristics.lns_window`; >= 0, default 0 = the
+        full re-opt up to ``LARGE`` clusters, 4 above).
+    fit_to_time
+        Without ``stop_at_convergence``, a trial that the time left cannot finish (at the rate of
+        iterations so far) is shortened to end, cooled, at the time limit; its length is
+        re-estimated between the compiled chunks.
+    fit_trials
+        With ``fit_to_time``, trials are also short enough (at the rate so far) for this many to
+        fit in the time limit, but at least ``FIT_FLOOR`` iterations per cluster (>= 1, default
+        32): on a short budget, more and shorter trials, so that the cold restarts come in time.
     """
 
     asymmetric = True
@@ -281,10 +325,12 @@ class Lns:
         remove_fraction: float = 0.3, max_removals: int | None = None, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
+        reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
-                                    neighbours, stop_at_convergence, restart_after)
+                                    neighbours, stop_at_convergence, restart_after, reopt_window,
+                                    fit_to_time, fit_trials)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

@@ -22,6 +22,7 @@ from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported
     tour_cost,
     two_opt,
 )
+from gtsp_bench.solvers.heuristics.lns_window import local_search_window, remove_near
 from numba import njit
 
 #: Removal operators, by index.
@@ -178,16 +179,24 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
 @njit(cache=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
-            tol: float, symmetric: bool) -> tuple[np.ndarray, float]:
+            tol: float, symmetric: bool, half: int) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
-    (waking the inserted clusters)."""
-    drop = remove(t, k, removal, edge, node)
+    (waking the inserted clusters). With ``half`` > 0, the large-cycle path of
+    :mod:`gtsp_bench.solvers.heuristics.lns_window`: its removals (when ``8 k`` is below the
+    cycle's length) and its windowed re-opt; else the full re-opt."""
+    if half > 0 and 8 * k < len(t):
+        drop = remove_near(t, k, removal, edge, node, near, cluster_of)
+    else:
+        drop = remove(t, k, removal, edge, node)
     partial = t[~drop]
     clusters = cluster_of[t[drop]]
     new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
     awake = np.zeros(len(t), dtype=np.bool_)
     awake[clusters] = True
-    cost = local_search(new, edge, node, start, near, cluster_of, tol, awake, symmetric)
+    if half > 0:
+        cost = local_search_window(new, edge, node, start, near, cluster_of, tol, awake, symmetric, half)
+    else:
+        cost = local_search(new, edge, node, start, near, cluster_of, tol, awake, symmetric)
     return new, cost
 
 
@@ -221,12 +230,14 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
     best, trial best),
     ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
     iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
-    temperature, end temperature, largest removal, noise, reaction), temperatures and noise in
-    cost units. Iterations are scored, accepted (simulated annealing) and rewarded as the module
-    :mod:`gtsp_bench.solvers.heuristics.lns` describes; chunks of any size give the same run.
+    temperature, end temperature, largest removal, noise, reaction, re-opt window half-width (0:
+    full re-opt)), temperatures and noise in cost units. Iterations are scored, accepted (simulated
+    annealing) and rewarded as the module :mod:`gtsp_bench.solvers.heuristics.lns` describes;
+    chunks of any size give the same run.
     """
     iterations, patience = int(settings[0]), int(settings[1])
     t0, t1, max_remove, noise, reaction = settings[2], settings[3], int(settings[4]), settings[5], settings[6]
+    half = int(settings[7])
     for _ in range(steps):
         it = counts[0]
         if it >= iterations or counts[1] >= patience:
@@ -238,7 +249,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
         cur_cost, best_cost = costs[0], costs[1]
         tol = REL_TOL * max(1.0, abs(cur_cost))
         new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol,
-                                symmetric)
+                                symmetric, half)
         counts[2] += 1
         counts[0] += 1
         if new_cost < best_cost - tol:
@@ -326,10 +337,14 @@ def warm_up() -> None:
     near = neighbours(edge, start, 3)
     t = np.arange(0, 12, 2, dtype=np.int64)
     for how in range(len(REMOVALS)):
-        iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True)
+        for half in (0, 1):
+            iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True,
+                    half)
+    for how in range(len(REMOVALS)):
+        remove_near(t, 1, how, edge, node, near, cluster_of)
     cur = t.copy()
     run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
-              np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1]),
+              np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1]),
               4, edge, node, start, near, cluster_of, True)
     local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
     tour_cost(t, edge, node)
