@@ -81,9 +81,10 @@ class Cuts:
         """Sum ``per_side`` (first axis: sides) over each row's sides."""
         if len(self.row) == len(self) and np.array_equal(self.row, np.arange(len(self))):
             return per_side
-        out = np.zeros((len(self), *per_side.shape[1:]))
-        np.add.at(out, self.row, per_side)
-        return out
+        # a sparse sum (``np.add.at`` over a sides x columns matrix took 0.1 s a call at K = 100)
+        rows = sp.csr_array((np.ones(len(self.row)), (self.row, np.arange(len(self.row)))),
+                            shape=(len(self), len(self.row)))
+        return np.asarray(rows @ per_side.astype(float))
 
     def matrix(self, model: GtspModel, cols: np.ndarray) -> np.ndarray:
         """Dense ``(R, len(cols))`` coefficients over columns ``cols``."""
