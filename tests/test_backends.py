@@ -84,3 +84,28 @@ def test_time_already_up_stops_instead_of_raising():
     assert lp.backend.solve_lp(-0.01).status == "stopped"
     res = lp.backend.solve_mip(-0.01, tour_cost, 1e-6, lambda v: None)
     assert res.values is None and not res.complete
+
+
+def test_dropped_columns_leave_the_backend_and_the_lp_equals_them_fixed_to_zero():
+    """Dropping columns (fixed or priced out) removes them from HiGHS and from ``cols``; the LP
+    then equals the LP with those columns fixed to 0, and the reduced costs stay HiGHS's own."""
+    lp, _ = _lp(HighsBackend, seed=4)
+    model = lp.model
+    for _ in range(3):
+        res = lp.backend.solve_lp(60.0)
+        cuts = separate(model, lp.full(res.values))
+        if cuts is None:
+            break
+        lp.add_cuts(cuts)
+    res = lp.backend.solve_lp(60.0)
+    drop = np.flatnonzero((lp.cols >= model.n_nodes) & (res.values < 1e-9))[::2]
+    assert len(drop) > 0
+    gone = lp.cols[drop]
+    fixed = LpModel(model, HighsBackend(MipOptions()), lp.cols)
+    fixed.add_cuts(lp.cuts)
+    fixed.fix_zero(drop)
+    lp.drop_cols(drop)
+    assert lp.backend.h.getNumCol() == len(lp.cols) and not np.isin(gone, lp.cols).any()
+    after = lp.backend.solve_lp(60.0)
+    np.testing.assert_allclose(after.objective, fixed.backend.solve_lp(60.0).objective, rtol=1e-9)
+    np.testing.assert_allclose(lp.reduced_costs(after.duals, lp.cols), after.reduced_costs, atol=1e-7)

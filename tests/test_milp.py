@@ -135,6 +135,22 @@ def test_tiny_time_limit_bound_is_below_the_dp_optimum(omega):
     assert r.objective >= opt - 1e-9
 
 
+@pytest.mark.parametrize("time_limit", [0.2, 0.6])
+def test_a_solve_stopped_anywhere_stays_honest(time_limit):
+    """Stopped wherever the limit falls (root loop, separation, restarts or branch and cut,
+    depending on the machine): a proof is the dp optimum; otherwise the status is time_limit,
+    the tour is no better than the optimum and the bound not above it. With one root round and
+    the greedy tour, the branch and cut does most of the work."""
+    inst = generate_instance(10, 20, seed=4)
+    opt = run_solver("dp", inst, 0.5).objective
+    for solver in (Milp(), Milp(root_rounds=1, lns_trials=0)):
+        r = run_solver(solver, inst, 0.5, time_limit=time_limit)
+        assert r.status in ("optimal", "time_limit")
+        assert r.lower_bound <= opt + 1e-6 and r.objective >= opt - 1e-9
+        if r.status == "optimal":
+            assert r.objective == pytest.approx(opt, rel=1e-9)
+
+
 def test_bad_options_and_input_are_refused():
     """Options are checked when the solver is built; an asymmetric matrix is refused."""
     with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):

@@ -154,3 +154,34 @@ def test_network_min_cut_sides_are_minimum_cuts():
             assert sink_side[size - 1] and not sink_side[0]
             leaving = ~sink_side[net.row] & sink_side[net.indices]
             assert cap[leaving].sum() == value
+
+
+def test_no_max_flow_or_handle_after_the_deadline():
+    """At a fractional root point where the max-flows and the blossoms find cuts, a deadline
+    already past stops both before their first max-flow or handle (the cheap node-cluster rows
+    are still returned by ``separate``)."""
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend, LpModel
+    from gtsp_bench.solvers.exact.mip.model import build_model
+    from gtsp_bench.solvers.exact.mip.options import MipOptions
+
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.problem import price
+
+    problem = price(generate_instance(12, 3, seed=0), 0.5)
+    model = build_model(problem, problem.clusters)
+    lp = LpModel(model, HighsBackend(MipOptions()), np.arange(model.n_cols))
+    found = set()
+    for _ in range(30):
+        values = lp.full(lp.backend.solve_lp(60.0).values)
+        for name in ("flow_cuts", "blossom_cuts"):
+            if getattr(separation, name)(model, values) is not None:
+                found.add(name)
+                assert getattr(separation, name)(model, values, deadline=0.0) is None
+        late = separation.separate(model, values, deadline=0.0)
+        assert late is None or np.allclose(late.slack(model, values),
+                                           late.slack(model, values).clip(max=0))  # all violated
+        cuts = separation.separate(model, values)
+        if cuts is None:
+            break
+        lp.add_cuts(cuts)
+    assert found == {"flow_cuts", "blossom_cuts"}

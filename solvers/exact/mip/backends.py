@@ -96,6 +96,10 @@ class Backend(Protocol):
         """Delete rows by index."""
         ...
 
+    def delete_cols(self, cols: np.ndarray) -> None:
+        """Delete columns by index (later ones are renumbered)."""
+        ...
+
     def set_bounds(self, cols: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
         """Change column bounds."""
         ...
@@ -170,6 +174,13 @@ class LpModel:
             self.backend.delete_rows(self.model.n_base_rows + np.flatnonzero(old))
             self.cuts, self.slack_age = self.cuts.select(~old), self.slack_age[~old]
 
+    def drop_cols(self, positions: np.ndarray) -> None:
+        """Delete backend columns ``positions`` (fixed to 0 or priced out: the search prices every
+        model column absent from the LP, so nothing is lost; their nonzeros leave the LP)."""
+        if len(positions):
+            self.backend.delete_cols(positions)
+            self.cols = np.delete(self.cols, positions)
+
     def fix_zero(self, positions: np.ndarray) -> None:
         """Fix backend columns to 0."""
         k = len(positions)
@@ -234,6 +245,10 @@ class HighsBackend:
     def delete_rows(self, rows: np.ndarray) -> None:
         """Delete rows by index."""
         self.h.deleteRows(len(rows), np.asarray(rows, dtype=np.int32))
+
+    def delete_cols(self, cols: np.ndarray) -> None:
+        """Delete columns by index."""
+        self.h.deleteCols(len(cols), np.asarray(cols, dtype=np.int32))
 
     def set_bounds(self, cols: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
         """Change column bounds."""
@@ -316,6 +331,12 @@ class GurobiBackend:
         gone = set(int(r) for r in rows)
         self.m.remove([self.rows[r] for r in gone])
         self.rows = [c for i, c in enumerate(self.rows) if i not in gone]
+
+    def delete_cols(self, cols: np.ndarray) -> None:
+        """Delete columns by index."""
+        gone = set(int(c) for c in cols)
+        self.m.remove([self.vars[c] for c in gone])
+        self.vars = [v for i, v in enumerate(self.vars) if i not in gone]
 
     def set_bounds(self, cols: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
         """Change column bounds."""

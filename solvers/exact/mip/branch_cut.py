@@ -179,7 +179,7 @@ class _Search:
         with _Timer(self.stats, "separation_s"):
             if _is_integral(values):
                 return subtour_cuts(self.model, values)
-            return separate(self.model, values, thorough=thorough)
+            return separate(self.model, values, thorough=thorough, deadline=self.deadline)
 
     # -------------------------------------------------------------- root
     def root(self) -> None:
@@ -204,12 +204,12 @@ class _Search:
             rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
             self.lb = max(self.lb, bound)
-            if self.proven:
+            if self.proven or self.left() <= 0:
                 break
             fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
-            if fix.any():
+            if fix.any():  # fixed columns leave the LP (their nonzeros slow every LP down)
                 self.fixed |= fix
-                lp.fix_zero(np.flatnonzero(fix[lp.cols]))
+                lp.drop_cols(np.flatnonzero(fix[lp.cols]))
             price = np.flatnonzero(absent & ~fix & (rc < -TOL))
             if len(price):  # the most negative columns join; cuts are separated meanwhile
                 lp.add_cols(price[np.argsort(rc[price])[:PRICE_PER_NODE * model.n_nodes]])
@@ -224,6 +224,8 @@ class _Search:
                         self.offer(values)  # the LP optimum is a tour: the optimum
                     break
                 continue
+            if self.left() <= 0:
+                break
             lp.purge(values, 3)
             lp.add_cuts(new)
         self.stats["root_rounds"] = self.stats.get("root_rounds", 0) + rounds  # (over both loops)
@@ -355,6 +357,8 @@ class _Search:
                     continue
             if res.objective > self.ub - self.gap:
                 return None
+            if self.left() <= 0:
+                return "stopped"
             history.append(res.objective)
             tailing = len(history) > 3 and history[-1] - history[-4] < 1e-4 * max(1.0, abs(history[-1]))
             new = None if tailing and not _is_integral(values) else self.separate(values, False)
