@@ -44,6 +44,9 @@ STRONG_CANDIDATES = 8
 DIVE_SHARE = 0.3
 #: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
 RESTART_SHARE = 0.05
+#: Share of the time limit after which an unfinished first root loop pauses for the restarts
+#: (then goes on): at K = 100 it would otherwise run to the limit with the first tour.
+ROOT_SHARE = 0.5
 
 
 # ---------------------------------------------------------------------- the method
@@ -182,12 +185,17 @@ class _Search:
             return separate(self.model, values, thorough=thorough, deadline=self.deadline)
 
     # -------------------------------------------------------------- root
-    def root(self) -> None:
-        """Root LP loop: price columns in, bound, fix by reduced cost, separate."""
+    def root(self, until: float | None = None) -> bool:
+        """Root LP loop: price columns in, bound, fix by reduced cost, separate; whether it
+        paused at ``until`` (a ``time.perf_counter()`` time) before it finished."""
         model, lp = self.model, self.lp
         history: list[float] = []
         rounds = 0
+        paused = False
         while rounds < self.options.root_rounds and self.left() > 0:
+            if until is not None and time.perf_counter() >= until:
+                paused = True
+                break
             rounds += 1
             res = self.solve_lp()
             present = np.zeros(model.n_cols, dtype=bool)
@@ -231,6 +239,7 @@ class _Search:
         self.stats["root_rounds"] = self.stats.get("root_rounds", 0) + rounds  # (over both loops)
         self.stats["root_bound"] = float(self.lb)
         self.stats["root_cuts"] = len(lp.cuts)
+        return paused
 
     def absent(self) -> np.ndarray:
         """Model columns neither in the LP nor fixed to 0."""
@@ -499,10 +508,11 @@ def solve_exact(
             prune_by = min(deadline, time.perf_counter() + PRUNE_SHARE * time_limit)
         kept = prune_heads(problem, deadline=prune_by) if options.prune else problem.clusters
     search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
-    search.root()
+    paused = search.root(None if time_limit is None else start + ROOT_SHARE * time_limit)
     if not search.proven and search.left() > 0:
-        # the root did not finish: LNS restarts for a small share of the limit, and a root loop
-        # again against a better incumbent (fixing more columns by reduced cost)
+        # the root did not finish (or paused at half the limit): LNS restarts for a small share
+        # of the limit, and the root loop again, against a better incumbent (it fixes more
+        # columns by reduced cost) or to go on where it paused
         with _Timer(stats, "heuristic_s"):
             until = None if time_limit is None else min(deadline, time.perf_counter()
                                                          + RESTART_SHARE * time_limit)
@@ -510,6 +520,8 @@ def solve_exact(
         if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
             stats["restart_gain"] = search.ub - problem.tour_cost(better)
             search.tour, search.ub = better, problem.tour_cost(better)
+            paused = True
+        if paused:
             search.root()
     if not search.proven and search.left() > 0:
         if isinstance(search.lp.backend, LazyMipBackend):
