@@ -290,6 +290,35 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 
 
 @njit(cache=True)
+def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
+                 rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """A local search's start: each cluster's position in ``t`` and ``rows`` rows of don't-look
+    bits, awake at the ``awake`` clusters and their tour neighbours."""
+    n = len(t)
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[cluster_of[t[i]]] = i
+    active = np.zeros((rows, n), dtype=np.bool_)
+    for i in range(n):
+        if awake[cluster_of[t[i]]]:
+            _touch(active, cluster_of, t, i)
+    return pos, active
+
+
+@njit(cache=True)
+def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+               near: np.ndarray, cluster_of: np.ndarray, tol: float, active: np.ndarray,
+               symmetric: bool) -> tuple[bool, float]:
+    """One round of 2-opt (symmetric costs only), or-opt and move on ``t`` (in place): whether
+    or-opt or move changed it, and its cost after the round."""
+    if symmetric:
+        two_opt(t, pos, edge, near, cluster_of, tol, active)
+    moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
+    moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active) or moved
+    return moved, tour_cost(t, edge, node)
+
+
+@njit(cache=True)
 def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                  near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
                  symmetric: bool) -> float:
@@ -301,20 +330,10 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
     every edge in its direction.
     """
     n = len(t)
-    pos = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        pos[cluster_of[t[i]]] = i
-    active = np.zeros((3, n), dtype=np.bool_)
-    for i in range(n):
-        if awake[cluster_of[t[i]]]:
-            _touch(active, cluster_of, t, i)
+    pos, active = search_state(t, cluster_of, awake, 3)
     cost = tour_cost(t, edge, node)
     while True:
-        if symmetric:
-            two_opt(t, pos, edge, near, cluster_of, tol, active)
-        moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
-        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active) or moved
-        new_cost = tour_cost(t, edge, node)
+        moved, new_cost = move_round(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric)
         if moved and new_cost < cost - tol:
             cost = new_cost
             continue

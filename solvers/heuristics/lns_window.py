@@ -18,11 +18,10 @@ from __future__ import annotations
 import numpy as np
 from gtsp_bench.solvers.heuristics.lns_local import (
     _touch,
-    move_opt,
-    or_opt,
+    move_round,
     reopt,
+    search_state,
     tour_cost,
-    two_opt,
 )
 from numba import njit
 
@@ -133,21 +132,10 @@ def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start
     """:func:`gtsp_bench.solvers.heuristics.lns_local.local_search` with the windowed re-opt
     (:func:`reopt_changed`, ``half`` positions either side of a changed cluster); in place,
     returns the cost."""
-    n = len(t)
-    pos = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        pos[cluster_of[t[i]]] = i
-    active = np.zeros((4, n), dtype=np.bool_)
-    for i in range(n):
-        if awake[cluster_of[t[i]]]:
-            _touch(active, cluster_of, t, i)
+    pos, active = search_state(t, cluster_of, awake, 4)
     cost = tour_cost(t, edge, node)
     while True:
-        if symmetric:
-            two_opt(t, pos, edge, near, cluster_of, tol, active)
-        moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
-        moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active) or moved
-        new_cost = tour_cost(t, edge, node)
+        moved, new_cost = move_round(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric)
         if moved and new_cost < cost - tol:
             cost = new_cost
             continue
