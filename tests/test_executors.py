@@ -144,8 +144,8 @@ def _launch(tmp_path: Path, executor: str) -> tuple[subprocess.Popen, object]:
             "--checkpoints", str(tmp_path / "ckpt"), "--no-progress"]
     launcher = ("import tests.runner_solvers as t; t.register(); from gtsp_bench.cli import main; "
                 f"raise SystemExit(main({argv!r}))")
-    # 1 s a solve: the 20 solves outlast the wait for the third logged one on a loaded machine
-    env = {**os.environ, "PYTHONPATH": str(REPO), "GTSP_TEST_SLOW_S": "1.0"}
+    # 2 s a solve: the 20 solves (20 s on 2 workers) outlast the wait for the third logged one
+    env = {**os.environ, "PYTHONPATH": str(REPO), "GTSP_TEST_SLOW_S": "2.0"}
     proc = subprocess.Popen([sys.executable, "-c", launcher], cwd=REPO, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     return proc, config
