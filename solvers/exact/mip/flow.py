@@ -35,19 +35,7 @@ def max_flow(indptr: np.ndarray, indices: np.ndarray, row: np.ndarray, rev: np.n
     path = np.empty(n, dtype=np.int64)
     total = 0
     while True:
-        level[:] = -1
-        level[source] = 0
-        queue[0] = source
-        first, last = 0, 1
-        while first < last:
-            u = queue[first]
-            first += 1
-            for p in range(indptr[u], indptr[u + 1]):
-                v = indices[p]
-                if level[v] < 0 and cap[p] - flow[p] > 0:
-                    level[v] = level[u] + 1
-                    queue[last] = v
-                    last += 1
+        _levels(indptr, indices, rev, cap - flow, source, False, level, queue)
         if level[sink] < 0:
             return total, flow
         for u in range(n):
@@ -86,14 +74,13 @@ def max_flow(indptr: np.ndarray, indices: np.ndarray, row: np.ndarray, rev: np.n
 
 
 @njit(cache=True)
-def reach(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np.ndarray,
-          start: int, backward: bool) -> np.ndarray:
-    """Nodes reachable from ``start`` along arcs of positive ``residual`` (``backward``: nodes
-    from which ``start`` is reachable)."""
-    n = len(indptr) - 1
-    seen = np.zeros(n, dtype=np.bool_)
-    queue = np.empty(n, dtype=np.int64)
-    seen[start] = True
+def _levels(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np.ndarray,
+            start: int, backward: bool, level: np.ndarray, queue: np.ndarray) -> None:
+    """Breadth-first distances from ``start`` along arcs of positive ``residual`` (``backward``:
+    along the reverse arcs, i.e. to ``start``) into ``level``, -1 where unreached; ``queue`` is
+    scratch space of the node count."""
+    level[:] = -1
+    level[start] = 0
     queue[0] = start
     first, last = 0, 1
     while first < last:
@@ -101,11 +88,21 @@ def reach(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np
         first += 1
         for p in range(indptr[u], indptr[u + 1]):
             v = indices[p]
-            if not seen[v] and (residual[rev[p]] if backward else residual[p]) > 0:
-                seen[v] = True
+            if level[v] < 0 and (residual[rev[p]] if backward else residual[p]) > 0:
+                level[v] = level[u] + 1
                 queue[last] = v
                 last += 1
-    return seen
+
+
+@njit(cache=True)
+def reach(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np.ndarray,
+          start: int, backward: bool) -> np.ndarray:
+    """Nodes reachable from ``start`` along arcs of positive ``residual`` (``backward``: nodes
+    from which ``start`` is reachable)."""
+    n = len(indptr) - 1
+    level = np.empty(n, dtype=np.int64)
+    _levels(indptr, indices, rev, residual, start, backward, level, np.empty(n, dtype=np.int64))
+    return level >= 0
 
 
 def warm_up() -> None:
