@@ -107,16 +107,23 @@ def test_tour_length_without_depot_is_a_cycle():
     assert tour_length(inst, np.array([0, 1, 2]), np.array([0, 0, 0])) == pytest.approx(12.0)
 
 
-def test_distance_matrix_in_row_chunks_is_the_broadcast_one(monkeypatch):
-    """Filled a few rows at a time, the matrix is exactly the all-pairs broadcast."""
+@pytest.mark.parametrize("rule", ["EUCLIDEAN", "EUC_2D", "CEIL_2D", "ATT", "GEO"])
+def test_distance_matrix_in_row_chunks_is_the_broadcast_one(monkeypatch, rule):
+    """Filled a few rows at a time (in place for the planar rules), the matrix is exactly the
+    all-pairs broadcast of :func:`pair_distances`, ties at .5 included."""
     import gtsp_bench.instance as instance_module
 
     rng = np.random.default_rng(3)
-    inst = Instance(name="chunks", clusters=tuple(rng.uniform(0, 1000, (5, 2)) for _ in range(7)),
-                    depot=np.array([500.0, 0.0]))
-    monkeypatch.setattr(instance_module, "_CHUNK_BYTES", 16 * 36 * 3)  # three rows at a time
-    pts = np.vstack([inst.coords, inst.depot])
-    want = pair_distances(pts[:, None, :], pts[None, :, :], "EUCLIDEAN")
+    clusters = tuple(rng.integers(0, 2000, (5, 2)) / 2.0 for _ in range(7))
+    if rule == "EUCLIDEAN":
+        inst = Instance(name="chunks", clusters=clusters, depot=np.array([500.0, 0.0]))
+        pts = np.vstack([inst.coords, inst.depot])
+    else:
+        inst = Instance(name="chunks", clusters=clusters, params=None, edge_weight_type=rule)
+        pts = inst.coords
+    monkeypatch.setattr(instance_module, "_CHUNK_BYTES", 16 * len(pts) * 3)  # three rows at a time
+    monkeypatch.setattr(instance_module, "_PLANAR_CHUNK_BYTES", 8 * len(pts) * 3)
+    want = pair_distances(pts[:, None, :], pts[None, :, :], rule)
     np.fill_diagonal(want, 0.0)
     assert np.array_equal(node_distance_matrix(inst), want)
 
