@@ -308,7 +308,7 @@ MAX_MATRIX_NODES = 32_000
 _CHUNK_BYTES = 2**26
 #: Rules that :func:`_planar_rows` computes in place, and the bytes of a row block it works on (a
 #: block that stays in the cache: a 15,112-node matrix takes about 1 s instead of 10 s).
-_PLANAR = ("EUCLIDEAN", "EUC_2D", "CEIL_2D")
+PLANAR_RULES = ("EUCLIDEAN", "EUC_2D", "CEIL_2D")
 _PLANAR_CHUNK_BYTES = 2**20
 
 
@@ -365,7 +365,7 @@ def node_distance_matrix(instance: Instance) -> np.ndarray:
         m = len(pts)
         w = np.empty((m, m))
         rule = instance.edge_weight_type
-        if rule in _PLANAR:
+        if rule in PLANAR_RULES:
             step = max(1, _PLANAR_CHUNK_BYTES // (8 * max(m, 1)))
             for lo in range(0, m, step):
                 _planar_rows(pts, lo, rule, w[lo:lo + step])

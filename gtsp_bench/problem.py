@@ -25,7 +25,13 @@ import numpy as np
 from gtsp_bench.checks import check_omega
 from gtsp_bench.energy import cluster_hover_energy, node_ground_energy
 from gtsp_bench.errors import InfeasibleSolutionError
-from gtsp_bench.instance import Instance, node_distance_matrix
+from gtsp_bench.instance import (
+    PLANAR_RULES,
+    Instance,
+    check_matrix_size,
+    node_distance_matrix,
+    pair_distances,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,21 +47,31 @@ class Problem:
     node_cost
         ``(m,)`` cost of choosing each node; node ids are the instance's global ids, and the
         depot, if any, is node ``m - 1`` with cost 0.
-    edge_cost
-        ``(m, m)`` edge costs, zero diagonal: ``edge_cost[i, j]`` is the cost of going from node i
-        to node j, equal to ``edge_cost[j, i]`` unless :attr:`symmetric` is false.
     clusters
         Node ids of each GTSP cluster: the K instance clusters in order, then ``[depot]``.
     depot
         Node id of the depot, or ``None``.
+    edge_scale
+        Each edge costs this times the distance between its nodes
+        (:func:`gtsp_bench.instance.node_distance_matrix`).
     """
 
     instance: Instance
     omega: float | None
     node_cost: np.ndarray
-    edge_cost: np.ndarray
     clusters: tuple[np.ndarray, ...]
     depot: int | None
+    edge_scale: float = 1.0
+
+    @cached_property
+    def edge_cost(self) -> np.ndarray:
+        """``(m, m)`` edge costs, zero diagonal, read-only: ``edge_cost[i, j]`` is the cost of going
+        from node i to node j, equal to ``edge_cost[j, i]`` unless :attr:`symmetric` is false.
+        Built on first use (a solver that computes its costs from the coordinates never builds it)."""
+        dist = node_distance_matrix(self.instance)
+        out = dist if self.edge_scale == 1.0 else self.edge_scale * dist
+        out.setflags(write=False)
+        return out
 
     @property
     def symmetric(self) -> bool:
@@ -85,7 +101,34 @@ class Problem:
         """Cost of the closed tour through ``tour`` (node ids, one per cluster, any rotation), in
         its direction: ``tour[i] -> tour[i + 1]``, then ``tour[-1] -> tour[0]``."""
         t = np.asarray(tour, dtype=np.int64)
-        return float(self.node_cost[t].sum() + self.edge_cost[t, np.roll(t, -1)].sum())
+        return float(self.node_cost[t].sum() + self.edge_costs(t, np.roll(t, -1)).sum())
+
+    def edge_costs(self, tails: np.ndarray, heads: np.ndarray) -> np.ndarray:
+        """The costs of the edges ``tails[i] -> heads[i]`` (see :meth:`edge_row`)."""
+        if self._from_matrix:
+            return self.edge_cost[tails, heads]
+        dist = pair_distances(self._points[tails], self._points[heads], self.instance.edge_weight_type)
+        dist[tails == heads] = 0.0
+        return dist if self.edge_scale == 1.0 else self.edge_scale * dist
+
+    def edge_row(self, i: int) -> np.ndarray:
+        """``edge_cost[i]``: read from :attr:`edge_cost` once it is built or when the rule is not
+        planar, else computed from the coordinates (the same numbers as the matrix holds: the same
+        operations), without building the matrix."""
+        if self._from_matrix:
+            return self.edge_cost[i]
+        dist = pair_distances(self._points[i], self._points, self.instance.edge_weight_type)
+        dist[i] = 0.0
+        return dist if self.edge_scale == 1.0 else self.edge_scale * dist
+
+    @property
+    def _from_matrix(self) -> bool:
+        return "edge_cost" in self.__dict__ or self.instance.edge_weight_type not in PLANAR_RULES
+
+    @cached_property
+    def _points(self) -> np.ndarray:
+        pts = self.instance.coords
+        return pts if self.instance.depot is None else np.vstack([pts, self.instance.depot])
 
     def to_tour(self, order: Sequence[int], heads: Sequence[int]) -> np.ndarray:
         """Node ids of a solution's tour, starting at the depot when there is one."""
@@ -129,24 +172,24 @@ def price(instance: Instance, omega: float | None) -> Problem:
         If ``omega`` is not in [0, 1] for a UAV instance, or the instance is too large for a full
         cost matrix (:func:`gtsp_bench.instance.check_matrix_size`).
     """
-    dist = node_distance_matrix(instance)
+    check_matrix_size(instance)
     n = instance.n_nodes
     if instance.params is None:
         w = None
-        node_cost = np.zeros(len(dist))
-        edge_cost = dist
+        node_cost = np.zeros(n + (instance.depot is not None))
+        scale = 1.0
     else:
         w = check_omega(omega)
         hover = cluster_hover_energy(instance)[instance.cluster_of]
         node_cost = w * node_ground_energy(instance) + (1.0 - w) * hover
         if instance.depot is not None:
             node_cost = np.append(node_cost, 0.0)
-        edge_cost = (1.0 - w) * instance.params.flight_energy_per_m * dist
+        scale = (1.0 - w) * instance.params.flight_energy_per_m
     clusters = [np.arange(o, o + s) for o, s in zip(instance.offsets, instance.sizes, strict=True)]
     depot = None
     if instance.depot is not None:
         depot = n
         clusters.append(np.array([n]))
-    for a in (node_cost, edge_cost, *clusters):
+    for a in (node_cost, *clusters):
         a.setflags(write=False)
-    return Problem(instance, w, node_cost, edge_cost, tuple(clusters), depot)
+    return Problem(instance, w, node_cost, tuple(clusters), depot, scale)

@@ -22,7 +22,7 @@ def greedy_tour(problem: Problem, start: int) -> np.ndarray:
     tour = [start]
     current = start
     for _ in range(problem.n_clusters - 1):
-        score = np.where(alive, problem.edge_cost[current] + problem.node_cost, np.inf)
+        score = np.where(alive, problem.edge_row(current) + problem.node_cost, np.inf)
         current = int(np.argmin(score))
         tour.append(current)
         alive &= cluster_of != cluster_of[current]

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -83,6 +84,7 @@ class LnsSettings:
     reopt_window: int | None = None
     fit_to_time: bool = True
     fit_trials: int = 32
+    points: bool | None = None
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -111,6 +113,8 @@ class LnsSettings:
             check_int("reopt_window", self.reopt_window, 0)
         check_bool("fit_to_time", self.fit_to_time)
         check_int("fit_trials", self.fit_trials, 1)
+        if self.points is not None:
+            check_bool("points", self.points)
 
     @property
     def hottest(self) -> float:
@@ -164,7 +168,7 @@ class _Search:
         self.p = problem
         self.s = settings
         self.rng = rng
-        self.edge = np.ascontiguousarray(problem.edge_cost, dtype=np.float64)
+        self.edge = kernel_costs(problem, settings.points)
         self.node = np.ascontiguousarray(problem.node_cost, dtype=np.float64)
         self.start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
         if not np.array_equal(np.repeat(np.arange(problem.n_clusters), np.diff(self.start)),
@@ -215,7 +219,7 @@ class _Search:
                 if base_cost < best_cost - REL_TOL * abs(best_cost):
                     best, best_cost = base.copy(), base_cost
             cur, trial_best = base.copy(), base.copy()
-            mean_edge = float(np.mean(self.edge[cur, np.roll(cur, -1)])) * heat
+            mean_edge = float(np.mean(p.edge_costs(cur, np.roll(cur, -1)))) * heat
             settings = np.array([iterations, patience, s.hottest * mean_edge,
                                  s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
                                  s.reaction, s.reopt_window_for(n)], dtype=np.float64)
@@ -316,6 +320,11 @@ class Lns:
         With ``fit_to_time``, trials are also short enough (at the rate so far) for this many to
         fit in the time limit, but at least ``FIT_FLOOR`` iterations per cluster (>= 1, default
         32): on a short budget, more and shorter trials, so that the cold restarts come in time.
+    points
+        Compute each edge cost from the coordinates where it is needed instead of reading the
+        cost matrix (:mod:`gtsp_bench.solvers.heuristics.lns_costs`; the same numbers, so the same
+        search). Default ``None``: from ``POINTS_FROM`` (2,000) nodes up, when the instance's rule
+        is planar (EUCLIDEAN, EUC_2D, CEIL_2D); the matrix is then never built.
     """
 
     asymmetric = True
@@ -326,11 +335,12 @@ class Lns:
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
+        points: bool | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
-                                    fit_to_time, fit_trials)
+                                    fit_to_time, fit_trials, points)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

@@ -1,7 +1,8 @@
 """Compiled inner loops of :mod:`gtsp_bench.solvers.heuristics.lns` (numba, ``cache=True``).
 
 A tour is an ``int64`` array of node ids, one per GTSP cluster, in cycle order. The problem is
-given as ``edge`` (``(m, m)`` float64, ``edge[i, j]`` from i to j), ``node`` (``(m,)``) and
+given as ``edge`` (the edge costs: a ``(m, m)`` float64 matrix or points, read as ``ec(edge, i, j)``
+from i to j: :mod:`gtsp_bench.solvers.heuristics.lns_costs`), ``node`` (``(m,)``) and
 ``start`` (``(k + 1,)``: the nodes of cluster ``c`` are ``start[c] .. start[c + 1] - 1``, as
 :func:`gtsp_bench.problem.price` numbers them). One iteration of the search, :func:`iterate`, is
 one call: remove clusters, insert them back, then the local search of
@@ -14,6 +15,7 @@ answers, much slower).
 from __future__ import annotations
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.lns_costs import ec
 from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported for callers)
     local_search,
     move_opt,
@@ -29,6 +31,10 @@ from numba import njit
 REMOVALS = ("random", "worst", "segment", "distance")
 #: Insertion operators, by index: which pending cluster goes in next.
 INSERTIONS = ("cheapest", "farthest", "randomised")
+#: On a cycle longer than this, a cluster none of whose neighbours is in the cycle is priced beside
+#: its neighbours' neighbours before every edge is (each edge is a cache miss on a large matrix:
+#: on 3,023 clusters the full scans were most of an iteration's insertion time).
+WIDE_INSERT = 400
 
 
 @njit(cache=True)
@@ -51,7 +57,8 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
         key = np.empty(n)
         for i in range(n):
             a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
-            key[i] = -(edge[a, u] + node[u] + edge[u, b] - edge[a, b]) * (0.5 + np.random.random())
+            key[i] = -(ec(edge, a, u) + node[u] + ec(edge, u, b)
+                       - ec(edge, a, b)) * (0.5 + np.random.random())
         order = np.argsort(key)
         for i in range(k):
             drop[order[i]] = True
@@ -63,7 +70,7 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
         s = np.random.randint(0, n)
         key = np.empty(n)
         for i in range(n):
-            key[i] = edge[t[s], t[i]]
+            key[i] = ec(edge, t[s], t[i])
         key[s] = -1.0
         order = np.argsort(key)
         for i in range(k):
@@ -75,12 +82,14 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
 @njit(cache=True)
 def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 start: np.ndarray, noise: float, best: float, best_s: int,
-                best_v: int) -> tuple[float, int, int]:
-    """``(best, best_s, best_v)`` improved by putting cluster ``c`` on the edge from slot ``e``."""
+                best_v: int, symmetric: bool) -> tuple[float, int, int]:
+    """``(best, best_s, best_v)`` improved by putting cluster ``c`` on the edge from slot ``e``
+    (on ``symmetric`` costs ``ec(edge, v, b)`` is read as ``ec(edge, b, v)``, the same number: the cluster's
+    nodes are then one run of a row, not a row each, which on a large matrix is a cache miss each)."""
     a, b = at[e], at[nxt[e]]
-    base = -edge[a, b]
+    base = -ec(edge, a, b)
     for v in range(start[c], start[c + 1]):
-        d = base + edge[a, v] + edge[v, b] + node[v]
+        d = base + ec(edge, a, v) + (ec(edge, b, v) if symmetric else ec(edge, v, b)) + node[v]
         if noise > 0.0:
             d += noise * np.random.random()
         if d < best:
@@ -91,35 +100,51 @@ def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarra
 @njit(cache=True)
 def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
                 slot_of: np.ndarray, near: np.ndarray, edge: np.ndarray, node: np.ndarray,
-                start: np.ndarray, noise: float) -> tuple[float, int, int]:
+                start: np.ndarray, noise: float, symmetric: bool) -> tuple[float, int, int]:
     """Cheapest (cost, slot, node) to put cluster ``c`` on an edge of the linked cycle: the edges
     beside its neighbour clusters' heads when the cycle is long (``4 * len(near[c]) < n_slots``)
-    and one of them is in it, else every edge."""
+    and one of them is in it; on a cycle of more than ``WIDE_INSERT`` slots, failing those, the
+    edges beside its neighbours' neighbours; else every edge."""
     best, best_s, best_v = np.inf, -1, -1
-    if 4 * near.shape[1] < n_slots:
-        for w in range(near.shape[1]):
+    m = near.shape[1]
+    if 4 * m < n_slots:
+        for w in range(m):
             sl = slot_of[near[c, w]]
             if sl >= 0:
                 best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start, noise,
-                                                   best, best_s, best_v)
+                                                   best, best_s, best_v, symmetric)
                 best, best_s, best_v = _price_edge(c, sl, at, nxt, edge, node, start, noise,
-                                                   best, best_s, best_v)
+                                                   best, best_s, best_v, symmetric)
         if best_s >= 0:
             return best, best_s, best_v
+        if n_slots > WIDE_INSERT:
+            for w in range(m):
+                for x in range(m):
+                    sl = slot_of[near[near[c, w], x]]
+                    if sl >= 0:
+                        best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start,
+                                                           noise, best, best_s, best_v, symmetric)
+                        best, best_s, best_v = _price_edge(c, sl, at, nxt, edge, node, start, noise,
+                                                           best, best_s, best_v, symmetric)
+            if best_s >= 0:
+                return best, best_s, best_v
     for e in range(n_slots):
-        best, best_s, best_v = _price_edge(c, e, at, nxt, edge, node, start, noise, best, best_s, best_v)
+        best, best_s, best_v = _price_edge(c, e, at, nxt, edge, node, start, noise, best, best_s, best_v,
+                                           symmetric)
     return best, best_s, best_v
 
 
 @njit(cache=True)
 def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, edge: np.ndarray,
-           node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray) -> np.ndarray:
+           node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
+           symmetric: bool = False) -> np.ndarray:
     """Put ``clusters`` back into the cycle ``partial``, each at a cheapest place and head.
 
     ``how`` (:data:`INSERTIONS`) picks the next cluster: the one cheapest to insert, the one
     dearest to insert, or a random one; ``noise`` adds up to that much to every price. Prices are
     kept per pending cluster and re-computed only when its best edge was the one split; on a long
     cycle only the edges beside its ``near`` clusters are priced (:func:`_best_place`).
+    ``symmetric`` (costs equal to their transpose) only changes how the matrix is read.
     """
     r = len(clusters)
     n = len(partial) + r
@@ -138,7 +163,7 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
     head = np.empty(r, dtype=np.int64)
     for j in range(r):
         cost[j], slot[j], head[j] = _best_place(clusters[j], p, at, nxt, prv, slot_of, near, edge,
-                                                node, start, noise)
+                                                node, start, noise, symmetric)
     pending = np.ones(r, dtype=np.bool_)
     order = np.random.permutation(r)
     for step in range(r):
@@ -163,11 +188,11 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
                 continue
             if slot[q] == s:  # its best edge is gone: price it again
                 cost[q], slot[q], head[q] = _best_place(clusters[q], p, at, nxt, prv, slot_of, near,
-                                                        edge, node, start, noise)
+                                                        edge, node, start, noise, symmetric)
                 continue
             for e in (s, new):  # the two new edges
                 cost[q], slot[q], head[q] = _price_edge(clusters[q], e, at, nxt, edge, node, start,
-                                                        noise, cost[q], slot[q], head[q])
+                                                        noise, cost[q], slot[q], head[q], symmetric)
     out = np.empty(n, dtype=np.int64)
     s = 0
     for i in range(n):
@@ -190,7 +215,7 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
         drop = remove(t, k, removal, edge, node)
     partial = t[~drop]
     clusters = cluster_of[t[drop]]
-    new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of)
+    new = insert(partial, clusters, insertion, noise, edge, node, start, near, cluster_of, symmetric)
     awake = np.zeros(len(t), dtype=np.bool_)
     awake[clusters] = True
     if half > 0:
@@ -293,7 +318,7 @@ def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 
 @njit(cache=True)
 def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
-    """``(k, k)``: the least ``edge[i, j]`` from a node of each cluster to a node of each other
+    """``(k, k)``: the least ``ec(edge, i, j)`` from a node of each cluster to a node of each other
     (one pass over the matrix, row by row)."""
     k = len(start) - 1
     dist = np.full((k, k), np.inf)
@@ -302,8 +327,8 @@ def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
             for d in range(k):
                 low = dist[c, d]
                 for j in range(start[d], start[d + 1]):
-                    if edge[i, j] < low:
-                        low = edge[i, j]
+                    if ec(edge, i, j) < low:
+                        low = ec(edge, i, j)
                 dist[c, d] = low
     return dist
 
@@ -334,19 +359,22 @@ def warm_up() -> None:
     cluster_of = np.repeat(np.arange(6), 2).astype(np.int64)
     edge.setflags(write=False)  # as gtsp_bench.problem.price leaves them: numba types them apart
     node.setflags(write=False)
-    near = neighbours(edge, start, 3)
-    t = np.arange(0, 12, 2, dtype=np.int64)
-    for how in range(len(REMOVALS)):
-        for half in (0, 1):
-            iterate(t, 2, how, how % len(INSERTIONS), 0.1, edge, node, start, near, cluster_of, 1e-9, True,
-                    half)
-    for how in range(len(REMOVALS)):
-        remove_near(t, 1, how, edge, node, near, cluster_of)
-    cur = t.copy()
-    run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, edge, node)), np.zeros(4, dtype=np.int64),
-              np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)), np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1]),
-              4, edge, node, start, near, cluster_of, True)
-    local_search(t.copy(), edge, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
-    tour_cost(t, edge, node)
-    random_insertion_tour(edge, node, start, near, cluster_of)
+    points = np.column_stack([xy, np.zeros(12)])
+    points.setflags(write=False)  # as lns_costs.points_of leaves them
+    for costs in (edge, (points, 1, 1.0)):  # the two kinds of lns_costs
+        near = neighbours(costs, start, 3)
+        t = np.arange(0, 12, 2, dtype=np.int64)
+        for how in range(len(REMOVALS)):
+            for half in (0, 1):
+                iterate(t, 2, how, how % len(INSERTIONS), 0.1, costs, node, start, near, cluster_of, 1e-9,
+                        True, half)
+        for how in range(len(REMOVALS)):
+            remove_near(t, 1, how, costs, node, near, cluster_of)
+        cur = t.copy()
+        run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, costs, node)),
+                  np.zeros(4, dtype=np.int64), np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)),
+                  np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1]), 4, costs, node, start, near, cluster_of, True)
+        local_search(t.copy(), costs, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
+        tour_cost(t, costs, node)
+        random_insertion_tour(costs, node, start, near, cluster_of)
     seed(0)

@@ -18,6 +18,7 @@ changed.
 from __future__ import annotations
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.lns_costs import ec
 from numba import njit
 
 
@@ -27,7 +28,7 @@ def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
     n = len(t)
     total = 0.0
     for i in range(n):
-        total += node[t[i]] + edge[t[i], t[(i + 1) % n]]
+        total += node[t[i]] + ec(edge, t[i], t[(i + 1) % n])
     return total
 
 
@@ -83,7 +84,7 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                 j = pos[near[cluster_of[a], w]]
                 c, d, e = t[j], t[(j + 1) % n], t[(j - 1) % n]
                 if c != b and d != a:  # a -> c ... b -> d: reverse i + 1 .. j
-                    delta = edge[a, c] + edge[b, d] - edge[a, b] - edge[c, d]
+                    delta = ec(edge, a, c) + ec(edge, b, d) - ec(edge, a, b) - ec(edge, c, d)
                     if delta < -tol:
                         _reverse(t, pos, cluster_of, (i + 1) % n, j)
                         for x in (a, b, c, d):
@@ -91,7 +92,7 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                         improved = found = True
                         continue
                 if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
-                    delta = edge[a, c] + edge[p, e] - edge[p, a] - edge[e, c]
+                    delta = ec(edge, a, c) + ec(edge, p, e) - ec(edge, p, a) - ec(edge, e, c)
                     if delta < -tol:
                         _reverse(t, pos, cluster_of, i, (j - 1) % n)
                         for x in (a, p, c, e):
@@ -107,13 +108,14 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
 @njit(cache=True)
 def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
              start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
-             active: np.ndarray) -> bool:
+             active: np.ndarray, symmetric: bool = False) -> bool:
     """Each awake cluster (``active[1]``) in turn to its cheapest place and head (GLNS's
     moveopt), in place.
 
     The places tried are its own and the edges on either side of the heads of its neighbour
     clusters ``near[c]``. A cluster that stays goes to sleep; one that moves wakes its old and new
-    neighbours. Returns whether anything improved.
+    neighbours. Returns whether anything improved. On ``symmetric`` costs ``ec(edge, v, y)`` is read
+    as ``ec(edge, y, v)`` (the same number; a cluster's nodes are then one run of one row).
     """
     n = len(t)
     if n < 3:
@@ -125,11 +127,11 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
         i = pos[c]
         u = t[i]
         a, b = t[(i - 1) % n], t[(i + 1) % n]
-        base = -edge[a, b]
-        saving = edge[a, u] + node[u] + edge[u, b] + base  # what taking u out saves
+        base = -ec(edge, a, b)
+        saving = ec(edge, a, u) + node[u] + ec(edge, u, b) + base  # what taking u out saves
         best, best_j, best_v = saving - tol, -1, -1
         for v in range(start[c], start[c + 1]):  # the same place with another head
-            d = base + edge[a, v] + edge[v, b] + node[v]
+            d = base + ec(edge, a, v) + (ec(edge, b, v) if symmetric else ec(edge, v, b)) + node[v]
             if d < best:
                 best, best_j, best_v = d, -2, v
         for w in range(near.shape[1]):
@@ -138,9 +140,9 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 if j == i or (j + 1) % n == i:
                     continue
                 x, y = t[j], t[(j + 1) % n]
-                base = -edge[x, y]
+                base = -ec(edge, x, y)
                 for v in range(start[c], start[c + 1]):
-                    d = base + edge[x, v] + edge[v, y] + node[v]
+                    d = base + ec(edge, x, v) + (ec(edge, y, v) if symmetric else ec(edge, v, y)) + node[v]
                     if d < best:
                         best, best_j, best_v = d, j, v
         if best_j == -1:
@@ -190,7 +192,7 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
         for length in (2, 3):
             a, b = t[i], t[(i + length - 1) % n]
             p, q = t[(i - 1) % n], t[(i + length) % n]
-            gain = edge[p, a] + edge[b, q] - edge[p, q]  # what taking the run out saves
+            gain = ec(edge, p, a) + ec(edge, b, q) - ec(edge, p, q)  # what taking the run out saves
             if gain <= tol:
                 continue
             best, best_j = gain - tol, -1
@@ -199,7 +201,7 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                     if (j - i + 1) % n <= length:  # the edge t[j] -> t[j + 1] touches the run
                         continue
                     x, y = t[j], t[(j + 1) % n]
-                    d = edge[x, a] + edge[b, y] - edge[x, y]
+                    d = ec(edge, x, a) + ec(edge, b, y) - ec(edge, x, y)
                     if d < best:
                         best, best_j = d, j
             if best_j < 0:
@@ -260,7 +262,7 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
             for v in range(lo, hi):
                 bv, bu = np.inf, -1
                 for u in range(prev_lo, prev_hi):
-                    d = cur[u - prev_lo] + edge[u, v]
+                    d = cur[u - prev_lo] + ec(edge, u, v)
                     if d < bv:
                         bv, bu = d, u
                 new[v - lo] = bv + node[v]
@@ -269,7 +271,7 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                 cur[v] = new[v]
             prev_lo, prev_hi = lo, hi
         for v in range(prev_lo, prev_hi):
-            total = cur[v - prev_lo] + edge[v, s]
+            total = cur[v - prev_lo] + ec(edge, v, s)
             if total < best_total:
                 best_total = total
                 path[n - 1] = v
@@ -314,7 +316,7 @@ def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarra
     if symmetric:
         two_opt(t, pos, edge, near, cluster_of, tol, active)
     moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
-    moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active) or moved
+    moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric) or moved
     return moved, tour_cost(t, edge, node)
 
 

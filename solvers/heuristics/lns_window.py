@@ -16,6 +16,7 @@ at all of them.
 from __future__ import annotations
 
 import numpy as np
+from gtsp_bench.solvers.heuristics.lns_costs import ec
 from gtsp_bench.solvers.heuristics.lns_local import (
     _touch,
     move_round,
@@ -41,17 +42,17 @@ def reopt_window(t: np.ndarray, lo: int, length: int, edge: np.ndarray, node: np
     back = np.empty((length, cap), dtype=np.int64)
     cur = np.empty(cap)
     new = np.empty(cap)
-    old = edge[t[(lo + length - 1) % n], b]
+    old = ec(edge, t[(lo + length - 1) % n], b)
     prev_lo, prev_hi = a, a + 1
     for x in range(length):
         u0 = t[(lo + x) % n]
-        old += edge[t[(lo + x - 1) % n], u0] + node[u0]
+        old += ec(edge, t[(lo + x - 1) % n], u0) + node[u0]
         c = cluster_of[u0]
         c_lo, c_hi = start[c], start[c + 1]
         for v in range(c_lo, c_hi):
             bv, bu = np.inf, -1
             for u in range(prev_lo, prev_hi):
-                d = (cur[u - prev_lo] if x > 0 else 0.0) + edge[u, v]
+                d = (cur[u - prev_lo] if x > 0 else 0.0) + ec(edge, u, v)
                 if d < bv:
                     bv, bu = d, u
             new[v - c_lo] = bv + node[v]
@@ -61,7 +62,7 @@ def reopt_window(t: np.ndarray, lo: int, length: int, edge: np.ndarray, node: np
         prev_lo, prev_hi = c_lo, c_hi
     best, best_v = np.inf, -1
     for v in range(prev_lo, prev_hi):
-        d = cur[v - prev_lo] + edge[v, b]
+        d = cur[v - prev_lo] + ec(edge, v, b)
         if d < best:
             best, best_v = d, v
     if best >= old - tol:
@@ -181,7 +182,8 @@ def remove_near(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndar
         for x in range(len(cand)):
             i = cand[x]
             a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
-            key[x] = -(edge[a, u] + node[u] + edge[u, b] - edge[a, b]) * (0.5 + np.random.random())
+            key[x] = -(ec(edge, a, u) + node[u] + ec(edge, u, b)
+                       - ec(edge, a, b)) * (0.5 + np.random.random())
         order = np.argsort(key)
         for x in range(k):
             drop[cand[order[x]]] = True
@@ -216,7 +218,7 @@ def remove_near(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndar
                     got += 1
         key = np.empty(got)
         for x in range(got):
-            key[x] = edge[t[s], t[cand[x]]]
+            key[x] = ec(edge, t[s], t[cand[x]])
         order = np.argsort(key)
         for x in range(k):
             drop[cand[order[x]]] = True

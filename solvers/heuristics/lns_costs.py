@@ -1,0 +1,95 @@
+"""Edge costs for the compiled loops of :mod:`gtsp_bench.solvers.heuristics.lns`: a matrix, or points.
+
+The kernels read the cost of the edge from node ``a`` to node ``b`` as ``ec(edge, a, b)``, where
+``edge`` is either
+
+* the ``(m, m)`` matrix of :attr:`gtsp_bench.problem.Problem.edge_cost`, or
+* **points**: a tuple ``(xy, rule, scale)`` of the ``(m, 2)`` node coordinates (the depot last),
+  a planar rule (:data:`RULES`) and a factor, from :func:`points_of`. Each cost is then computed
+  where it is needed, with the same operations as :func:`gtsp_bench.instance.pair_distances` and
+  :func:`gtsp_bench.problem.price`, so the same number as the matrix holds.
+
+numba compiles each kernel once per kind (both kinds are in its cache). On a large instance the
+points are the faster kind: a 15,112-node matrix takes 1.8 GB, and the search reads it at
+scattered rows, nearly every read a cache miss; the coordinates fit in the cache, and the matrix
+is never built.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import types
+from numba.extending import overload
+
+from gtsp_bench.problem import Problem
+
+#: Planar rules the points kind computes, by code (0 is not used: it would read as "no rule").
+RULES = {"EUCLIDEAN": 1, "EUC_2D": 2, "CEIL_2D": 3}
+#: Problems of at least this many nodes are searched on points when their rule allows it (below,
+#: the matrix is cheap to build and fits in the cache).
+POINTS_FROM = 2000
+
+Points = tuple[np.ndarray, int, float]
+
+
+def _planar(xy: np.ndarray, rule: int, scale: float, a: int, b: int) -> float:
+    dx = xy[a, 0] - xy[b, 0]
+    dy = xy[a, 1] - xy[b, 1]
+    r = math.sqrt(dx * dx + dy * dy)
+    if rule == 2:
+        return scale * math.floor(r + 0.5)
+    if rule == 3:
+        return scale * math.ceil(r)
+    return scale * r
+
+
+def ec(edge: np.ndarray | Points, a: int, b: int) -> float:
+    """The cost of the edge from node ``a`` to node ``b`` (a matrix entry, or computed from points)."""
+    if isinstance(edge, np.ndarray):
+        return float(edge[a, b])
+    return _planar(edge[0], edge[1], edge[2], a, b)
+
+
+@overload(ec)
+def _ec(edge, a, b):
+    if isinstance(edge, types.Array):
+        return lambda edge, a, b: edge[a, b]
+
+    def from_points(edge, a, b):
+        xy, rule, scale = edge
+        dx = xy[a, 0] - xy[b, 0]
+        dy = xy[a, 1] - xy[b, 1]
+        r = np.sqrt(dx * dx + dy * dy)
+        if rule == 2:
+            return scale * np.floor(r + 0.5)
+        if rule == 3:
+            return scale * np.ceil(r)
+        return scale * r
+
+    return from_points
+
+
+def points_of(problem: Problem) -> Points | None:
+    """``(xy, rule, scale)`` for ``problem``, or ``None`` when its costs are not a planar rule
+    times a factor (explicit weights, ATT, GEO, GEOM)."""
+    inst = problem.instance
+    rule = RULES.get(inst.edge_weight_type)
+    if rule is None:
+        return None
+    xy = inst.coords if inst.depot is None else np.vstack([inst.coords, inst.depot])
+    xy = np.ascontiguousarray(xy, dtype=np.float64)
+    xy.setflags(write=False)
+    return xy, rule, float(problem.edge_scale)
+
+
+def kernel_costs(problem: Problem, points: bool | None = None) -> np.ndarray | Points:
+    """What the kernels take as ``edge`` for ``problem``: its points when ``points`` (default:
+    from :data:`POINTS_FROM` nodes) and the rule allows, else its matrix."""
+    if points is None:
+        points = problem.n_nodes >= POINTS_FROM
+    found = points_of(problem) if points else None
+    if found is not None:
+        return found
+    return np.ascontiguousarray(problem.edge_cost, dtype=np.float64)
