@@ -59,6 +59,35 @@ def test_neighbours_are_nearest_first():
         assert max(d) <= min(others)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_quadrant_neighbours_hold_the_nearest_of_each_quadrant(seed):
+    """Each list excludes its cluster, has no repeat, is sorted by cluster distance, and holds
+    the nearest ``count // 4`` clusters of every quadrant around the cluster's centre; the other
+    places go to the nearest of the rest."""
+    p, start, _ = _problem(40, 3, seed)
+    k, count = p.n_clusters, 8
+    centre = np.array([p.instance.coords[c[0]] if c[0] < len(p.instance.coords) else p.instance.depot
+                       for c in p.clusters])  # any point per cluster will do for the test
+    near = kernels.quadrant_neighbours(p.edge_cost, start, count, centre)
+    dist = np.array([[p.edge_cost[np.ix_(p.clusters[c], p.clusters[o])].min() for o in range(k)]
+                     for c in range(k)])
+    for c in range(k):
+        row = near[c].tolist()
+        assert c not in row and len(set(row)) == count
+        assert [dist[c, o] for o in row] == sorted(dist[c, o] for o in row)
+        quadrant = [2 * int(centre[o, 0] >= centre[c, 0]) + int(centre[o, 1] >= centre[c, 1])
+                    for o in range(k)]
+        by_quadrant = set()
+        for q in range(4):
+            members = sorted((o for o in range(k) if o != c and quadrant[o] == q), key=lambda o: dist[c, o])
+            by_quadrant |= set(members[:count // 4])
+        assert by_quadrant <= set(row)
+        rest = [o for o in row if o not in by_quadrant]
+        left = [o for o in range(k) if o != c and o not in row]
+        if rest:
+            assert max(dist[c, o] for o in rest) <= min(dist[c, o] for o in left)
+
+
 def test_compiled_equals_python():
     """The deterministic kernels give identical answers compiled and as plain Python (the code
     that ``NUMBA_DISABLE_JIT=1`` runs)."""

@@ -77,6 +77,48 @@ def test_asymmetric_local_search_prices_each_arc_in_its_direction(seed):
 
 
 @pytest.mark.parametrize("seed", range(3))
+def test_or_opt_with_reversal_leaves_no_reversed_move(seed):
+    """Or-opt with ``reverse`` run until it stops: valid tour, heads kept, never dearer, and no run
+    of 2-3 clusters can be put reversed next to a neighbour of its ends (the places the move
+    looks at) for a gain; without ``reverse`` such moves are left on some tours."""
+    p, start, cluster_of = _problem(15, 3, seed)
+    near = kernels.neighbours(p.edge_cost, start, 6)
+    edge = p.edge_cost
+    rng = np.random.default_rng(seed)
+    left_without = 0
+    for _ in range(10):
+        first = _random_tour(p, rng)
+        for reverse in (True, False):
+            t = first.copy()
+            pos = np.empty(len(t), dtype=np.int64)
+            pos[cluster_of[t]] = np.arange(len(t))
+            before, heads = p.tour_cost(t), set(t.tolist())
+            awake = np.ones((3, len(t)), dtype=bool)
+            while lns_local.or_opt(t, pos, edge, near, cluster_of, 1e-9, awake, reverse):
+                pass
+            assert _feasible(p, t) and set(t.tolist()) == heads
+            assert np.array_equal(pos[cluster_of[t]], np.arange(len(t)))
+            assert p.tour_cost(t) <= before + 1e-9
+            n, found = len(t), False
+            for i in range(n):
+                for length in (2, 3):
+                    a, b = t[i], t[(i + length - 1) % n]
+                    pr, q = t[(i - 1) % n], t[(i + length) % n]
+                    gain = edge[pr, a] + edge[b, q] - edge[pr, q]
+                    for w in range(near.shape[1]):
+                        for j in (pos[near[cluster_of[a], w]], (pos[near[cluster_of[b], w]] - 1) % n):
+                            if (j - i + 1) % n <= length:
+                                continue
+                            x, y = t[j], t[(j + 1) % n]
+                            found |= edge[x, b] + edge[a, y] - edge[x, y] < gain - 1e-6
+            if reverse:
+                assert not found
+            else:
+                left_without += found
+    assert left_without > 0
+
+
+@pytest.mark.parametrize("seed", range(3))
 def test_or_opt_never_worse_and_feasible(seed):
     """Or-opt alone on random tours: one node per cluster, heads kept, the cost only falls, and
     it does fall on some of them."""

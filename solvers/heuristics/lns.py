@@ -21,7 +21,10 @@ hotter start); the first trial starts from the greedy tour improved by the local
 from the best tour so far, and a trial that did not improve it makes the next one hotter
 (temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
 its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
-windowed re-opt and sampled removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`.
+windowed re-opt, sampled removals and reversing or-opt of
+:mod:`gtsp_bench.solvers.heuristics.lns_window`, and the neighbour lists take the nearest clusters of
+each quadrant (``quadrants``); on large planar instances the edge costs come from the coordinates
+(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`).
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -40,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
+from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -85,6 +88,7 @@ class LnsSettings:
     fit_to_time: bool = True
     fit_trials: int = 32
     points: bool | None = None
+    quadrants: bool | None = None
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -115,6 +119,8 @@ class LnsSettings:
         check_int("fit_trials", self.fit_trials, 1)
         if self.points is not None:
             check_bool("points", self.points)
+        if self.quadrants is not None:
+            check_bool("quadrants", self.quadrants)
 
     @property
     def hottest(self) -> float:
@@ -135,6 +141,11 @@ class LnsSettings:
         if self.neighbours is not None:
             return self.neighbours
         return 10 if symmetric else max(1, n - 1)
+
+    def quadrants_for(self, n: int) -> bool:
+        """Whether the neighbour lists of ``n`` clusters take the nearest in each quadrant
+        (default: above ``LARGE`` clusters)."""
+        return self.quadrants if self.quadrants is not None else n > LARGE
 
     def max_removals_for(self, n: int) -> int:
         """Most clusters removed in one iteration for ``n`` clusters (default 100 up to
@@ -176,9 +187,14 @@ class _Search:
             raise ValueError("lns needs nodes numbered cluster by cluster")
         self.cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
         self.symmetric = bool(problem.symmetric)
-        self.near = kernels.neighbours(self.edge, self.start,
-                                       settings.neighbours_for(problem.n_clusters, self.symmetric))
         n = problem.n_clusters
+        count = settings.neighbours_for(n, self.symmetric)
+        points = points_of(problem) if settings.quadrants_for(n) else None
+        if points is None:
+            self.near = kernels.neighbours(self.edge, self.start, count)
+        else:
+            centre = np.add.reduceat(points[0], self.start[:-1], axis=0) / np.diff(self.start)[:, None]
+            self.near = kernels.quadrant_neighbours(self.edge, self.start, count, centre)
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
 
@@ -325,6 +341,11 @@ class Lns:
         cost matrix (:mod:`gtsp_bench.solvers.heuristics.lns_costs`; the same numbers, so the same
         search). Default ``None``: from ``POINTS_FROM`` (2,000) nodes up, when the instance's rule
         is planar (EUCLIDEAN, EUC_2D, CEIL_2D); the matrix is then never built.
+    quadrants
+        The moves' neighbour lists hold the ``neighbours // 4`` nearest clusters in each quadrant
+        around a cluster's centre, the rest the nearest of all (on a planar instance; default:
+        above ``LARGE`` clusters). On clustered instances the nearest clusters all lie in one
+        group, and no move would join two groups.
     """
 
     asymmetric = True
@@ -335,12 +356,12 @@ class Lns:
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
-        points: bool | None = None,
+        points: bool | None = None, quadrants: bool | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
-                                    fit_to_time, fit_trials, points)
+                                    fit_to_time, fit_trials, points, quadrants)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

@@ -349,6 +349,66 @@ def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
     return np.ascontiguousarray(near[rows, order], dtype=np.int64)
 
 
+@njit(cache=True)
+def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadrant: int) -> np.ndarray:
+    """The rows of :func:`quadrant_neighbours` (``dist`` with an infinite diagonal)."""
+    k = len(dist)
+    near = np.empty((k, count), dtype=np.int64)
+    for c in range(k):
+        # the per_quadrant nearest in each quadrant around c's centre, by an insertion sort each
+        best = np.full((4, per_quadrant), -1, dtype=np.int64)
+        for d in range(k):
+            if d == c:
+                continue
+            q = 2 * (centre[d, 0] >= centre[c, 0]) + (centre[d, 1] >= centre[c, 1])
+            x = per_quadrant
+            while x > 0 and (best[q, x - 1] < 0 or dist[c, d] < dist[c, best[q, x - 1]]):
+                x -= 1
+            if x < per_quadrant:
+                for y in range(per_quadrant - 1, x, -1):
+                    best[q, y] = best[q, y - 1]
+                best[q, x] = d
+        taken = np.zeros(k, dtype=np.bool_)
+        got = 0
+        for q in range(4):
+            for x in range(per_quadrant):
+                if best[q, x] >= 0 and got < count:
+                    taken[best[q, x]] = True
+                    near[c, got] = best[q, x]
+                    got += 1
+        order = np.argsort(dist[c], kind="mergesort")
+        x = 0
+        while got < count:  # the rest: the nearest not taken yet
+            if not taken[order[x]] and order[x] != c:
+                near[c, got] = order[x]
+                got += 1
+            x += 1
+        row = near[c].copy()
+        key = np.empty(count)
+        for x in range(count):
+            key[x] = dist[c, row[x]]
+        rank = np.argsort(key, kind="mergesort")
+        for x in range(count):
+            near[c, x] = row[rank[x]]
+    return near
+
+
+def quadrant_neighbours(edge: np.ndarray, start: np.ndarray, count: int,
+                        centre: np.ndarray) -> np.ndarray:
+    """Like :func:`neighbours`, but with the ``count // 4`` nearest clusters in each quadrant
+    around a cluster's centre ``centre[c]`` among them (the rest the nearest of all), nearest
+    first: on clustered instances the nearest clusters all lie in one group, and a move that joins
+    two groups would never be tried (Johnson and McGeoch's quadrant neighbours)."""
+    k = len(start) - 1
+    count = min(count, k - 1)
+    if count <= 0:
+        return np.zeros((k, 0), dtype=np.int64)
+    dist = cluster_distances(edge, start)
+    dist = np.minimum(dist, dist.T)
+    np.fill_diagonal(dist, np.inf)
+    return _quadrant_rows(dist, np.ascontiguousarray(centre, dtype=np.float64), count, count // 4)
+
+
 def warm_up() -> None:
     """Compile (first use on a machine) or load (later, from numba's cache) every kernel, on a
     tiny problem, so that a solver's clock does not pay for it."""
@@ -363,6 +423,7 @@ def warm_up() -> None:
     points.setflags(write=False)  # as lns_costs.points_of leaves them
     for costs in (edge, (points, 1, 1.0)):  # the two kinds of lns_costs
         near = neighbours(costs, start, 3)
+        quadrant_neighbours(costs, start, 4, np.column_stack([xy[::2], xy[1::2]]))
         t = np.arange(0, 12, 2, dtype=np.int64)
         for how in range(len(REMOVALS)):
             for half in (0, 1):

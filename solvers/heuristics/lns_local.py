@@ -4,7 +4,8 @@ Tours and problems as in :mod:`gtsp_bench.solvers.heuristics.lns_kernels`. :func
 repeats, until none improves:
 
 * **2-opt** on the cycle with the heads kept (first improvement; symmetric costs only);
-* **or-opt**: a run of 2 or 3 consecutive clusters, heads and direction kept, moved next to a
+* **or-opt**: a run of 2 or 3 consecutive clusters, heads and direction kept (or reversed, in the
+  large-cycle search of :mod:`gtsp_bench.solvers.heuristics.lns_window`), moved next to a
   neighbour of its first or last cluster;
 * **move** (GLNS's "moveopt"): each cluster in turn is taken out and put back at its cheapest
   position and head, when that is cheaper than where it is;
@@ -173,12 +174,13 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
 
 @njit(cache=True)
 def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
-           cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
+           cluster_of: np.ndarray, tol: float, active: np.ndarray, reverse: bool = False) -> bool:
     """Or-opt with fixed heads, first improvement, in place: the run of 2 or 3 clusters starting
-    at an awake cluster (``active[2]``) moves, in its direction, to just after the head of a
-    neighbour of its first cluster or just before the head of a neighbour of its last one. Each
-    arc is priced in its direction, so this is exact on asymmetric costs too. A cluster whose runs
-    do not move goes to sleep; the ends of changed edges wake. Returns whether anything improved.
+    at an awake cluster (``active[2]``) moves, in its direction (or, with ``reverse``, for
+    symmetric costs, reversed if that is cheaper), to just after the head of a neighbour of its
+    first cluster or just before the head of a neighbour of its last one. Each arc is priced in
+    its direction, so this is exact on asymmetric costs too. A cluster whose runs do not move goes
+    to sleep; the ends of changed edges wake. Returns whether anything improved.
     """
     n = len(t)
     if n < 6:
@@ -195,7 +197,7 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
             gain = ec(edge, p, a) + ec(edge, b, q) - ec(edge, p, q)  # what taking the run out saves
             if gain <= tol:
                 continue
-            best, best_j = gain - tol, -1
+            best, best_j, flip = gain - tol, -1, False
             for w in range(near.shape[1]):
                 for j in (pos[near[cluster_of[a], w]], (pos[near[cluster_of[b], w]] - 1) % n):
                     if (j - i + 1) % n <= length:  # the edge t[j] -> t[j + 1] touches the run
@@ -203,13 +205,17 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                     x, y = t[j], t[(j + 1) % n]
                     d = ec(edge, x, a) + ec(edge, b, y) - ec(edge, x, y)
                     if d < best:
-                        best, best_j = d, j
+                        best, best_j, flip = d, j, False
+                    if reverse:  # x -> b ... a -> y
+                        d = ec(edge, x, b) + ec(edge, a, y) - ec(edge, x, y)
+                        if d < best:
+                            best, best_j, flip = d, j, True
             if best_j < 0:
                 continue
             x, y = t[best_j], t[(best_j + 1) % n]
             run = np.empty(length, dtype=np.int64)
             for r in range(length):
-                run[r] = t[(i + r) % n]
+                run[length - 1 - r if flip else r] = t[(i + r) % n]
             out = np.empty(n, dtype=np.int64)
             k = 0
             for r in range(n - length):
@@ -310,12 +316,13 @@ def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
 @njit(cache=True)
 def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                near: np.ndarray, cluster_of: np.ndarray, tol: float, active: np.ndarray,
-               symmetric: bool) -> tuple[bool, float]:
-    """One round of 2-opt (symmetric costs only), or-opt and move on ``t`` (in place): whether
-    or-opt or move changed it, and its cost after the round."""
+               symmetric: bool, reverse: bool = False) -> tuple[bool, float]:
+    """One round of 2-opt (symmetric costs only), or-opt (runs also reversed with ``reverse``
+    on symmetric costs) and move on ``t`` (in place): whether or-opt or move changed it, and its
+    cost after the round."""
     if symmetric:
         two_opt(t, pos, edge, near, cluster_of, tol, active)
-    moved = or_opt(t, pos, edge, near, cluster_of, tol, active)
+    moved = or_opt(t, pos, edge, near, cluster_of, tol, active, reverse and symmetric)
     moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric) or moved
     return moved, tour_cost(t, edge, node)
 
