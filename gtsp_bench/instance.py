@@ -306,16 +306,16 @@ def _geom_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 MAX_MATRIX_NODES = 32_000
 #: Rows computed at once from coordinates (bounds the temporary arrays to a few tens of MB).
 _CHUNK_BYTES = 2**26
-#: Rules that :func:`_planar_rows` computes in place, and the bytes of a row block it works on (a
+#: Rules that :func:`planar_rows` computes in place, and the bytes of a row block it works on (a
 #: block that stays in the cache: a 15,112-node matrix takes about 1 s instead of 10 s).
 PLANAR_RULES = ("EUCLIDEAN", "EUC_2D", "CEIL_2D")
 _PLANAR_CHUNK_BYTES = 2**20
 
 
-def _planar_rows(pts: np.ndarray, lo: int, rule: str, out: np.ndarray) -> None:
-    """Rows ``lo, lo + 1, ...`` of the distance matrix of ``pts`` into ``out`` by a planar rule,
-    without temporaries of the block's size beyond two: the same numbers as :func:`pair_distances`
-    (the same operations in the same order)."""
+def planar_rows(pts: np.ndarray, lo: int, rule: str, out: np.ndarray) -> None:
+    """Rows ``lo, lo + 1, ...`` of the distance matrix of ``pts`` into ``out`` (``(rows, m)``) by a
+    planar rule (:data:`PLANAR_RULES`), without temporaries of the block's size beyond two: the
+    same numbers as :func:`pair_distances` (the same operations in the same order)."""
     block = pts[lo:lo + len(out)]
     dx = np.subtract.outer(block[:, 0], pts[:, 0])
     np.multiply(dx, dx, out=dx)
@@ -368,7 +368,7 @@ def node_distance_matrix(instance: Instance) -> np.ndarray:
         if rule in PLANAR_RULES:
             step = max(1, _PLANAR_CHUNK_BYTES // (8 * max(m, 1)))
             for lo in range(0, m, step):
-                _planar_rows(pts, lo, rule, w[lo:lo + step])
+                planar_rows(pts, lo, rule, w[lo:lo + step])
         else:
             step = max(1, _CHUNK_BYTES // (16 * max(m, 1)))
             for lo in range(0, m, step):

@@ -31,6 +31,7 @@ from gtsp_bench.instance import (
     check_matrix_size,
     node_distance_matrix,
     pair_distances,
+    planar_rows,
 )
 
 
@@ -117,9 +118,10 @@ class Problem:
         operations), without building the matrix."""
         if self._from_matrix:
             return self.edge_cost[i]
-        dist = pair_distances(self._points[i], self._points, self.instance.edge_weight_type)
-        dist[i] = 0.0
-        return dist if self.edge_scale == 1.0 else self.edge_scale * dist
+        dist = np.empty((1, len(self._points)))
+        planar_rows(self._points, i, self.instance.edge_weight_type, dist)
+        dist[0, i] = 0.0
+        return dist[0] if self.edge_scale == 1.0 else self.edge_scale * dist[0]
 
     @property
     def _from_matrix(self) -> bool:

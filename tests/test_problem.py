@@ -73,3 +73,26 @@ def test_asymmetric_problem_keeps_the_direction():
     assert p.tour_cost([0, 2, 1]) == 23.0 == evaluate(inst, None, [0, 2, 1], [0, 0, 0]).objective
     assert price(Instance(name="s", clusters=(np.zeros((2, 2)),), params=None,
                           edge_weight_type="EUC_2D"), None).symmetric
+
+
+@pytest.mark.parametrize("rule", ["uav", "EUC_2D", "CEIL_2D", "ATT", "GEO"])
+def test_edges_before_the_matrix_are_its_numbers(rule):
+    """edge_row, edge_costs and tour_cost give the matrix's numbers before it is built (from the
+    coordinates on planar rules, without building it; from the matrix on the others)."""
+    rng = np.random.default_rng(7)
+    if rule == "uav":
+        inst, omega = generate_instance(6, 5, seed=3), 0.4
+    else:
+        clusters = tuple(rng.integers(0, 3000, (3, 2)) / 2.0 for _ in range(6))
+        inst, omega = Instance(name=rule, clusters=clusters, params=None, edge_weight_type=rule), None
+    problem = price(inst, omega)
+    m = problem.n_nodes
+    rows = np.array([problem.edge_row(i) for i in range(m)])
+    tails, heads = rng.integers(0, m, 50), rng.integers(0, m, 50)
+    pairs = problem.edge_costs(tails, heads)
+    tour = np.array([c[0] for c in problem.clusters])
+    before = problem.tour_cost(tour)
+    assert ("edge_cost" in problem.__dict__) == (rule in ("ATT", "GEO"))
+    assert np.array_equal(rows, problem.edge_cost)
+    assert np.array_equal(pairs, problem.edge_cost[tails, heads])
+    assert before == problem.tour_cost(tour)
