@@ -101,3 +101,16 @@ def test_points_setting_is_checked():
     """``points`` must be a bool or None."""
     with pytest.raises(InputError, match="points"):
         Lns(points="yes")
+
+
+@pytest.mark.parametrize(("rule", "omega"), [("uav", 0.3), ("uav", 1.0), ("EUCLIDEAN", None),
+                                             ("EUC_2D", None), ("CEIL_2D", None)])
+def test_cluster_distances_on_points_equal_the_matrix(rule, omega):
+    """The least edge between two clusters, found over squared distances and rounded once, is the
+    matrix's least entry (a zero factor included), compiled and in plain Python."""
+    problem = price(_instance(rule, seed=6, clusters=15), omega)
+    start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
+    points = points_of(problem)
+    want = kernels.cluster_distances(problem.edge_cost, start)
+    assert np.array_equal(kernels.cluster_distances(points, start), want)
+    assert np.array_equal(kernels.cluster_distances.py_func(points, start), want)

@@ -34,15 +34,18 @@ POINTS_FROM = 2000
 Points = tuple[np.ndarray, int, float]
 
 
-def _planar(xy: np.ndarray, rule: int, scale: float, a: int, b: int) -> float:
-    dx = xy[a, 0] - xy[b, 0]
-    dy = xy[a, 1] - xy[b, 1]
-    r = math.sqrt(dx * dx + dy * dy)
+def _rounded(r: float, rule: int, scale: float) -> float:
     if rule == 2:
         return scale * math.floor(r + 0.5)
     if rule == 3:
         return scale * math.ceil(r)
     return scale * r
+
+
+def _planar(xy: np.ndarray, rule: int, scale: float, a: int, b: int) -> float:
+    dx = xy[a, 0] - xy[b, 0]
+    dy = xy[a, 1] - xy[b, 1]
+    return _rounded(math.sqrt(dx * dx + dy * dy), rule, scale)
 
 
 def ec(edge: np.ndarray | Points, a: int, b: int) -> float:
@@ -67,6 +70,54 @@ def _ec(edge, a, b):
         if rule == 3:
             return scale * np.ceil(r)
         return scale * r
+
+    return from_points
+
+
+def ec_key(edge: np.ndarray | Points, a: int, b: int) -> float:
+    """A key that orders edges as their costs do (a matrix entry, or a squared distance): the
+    least cost of many edges is ``ec_of_key(edge, least key)``, with one root and rounding."""
+    if isinstance(edge, np.ndarray):
+        return float(edge[a, b])
+    xy = edge[0]
+    dx = xy[a, 0] - xy[b, 0]
+    dy = xy[a, 1] - xy[b, 1]
+    return dx * dx + dy * dy
+
+
+def ec_of_key(edge: np.ndarray | Points, key: float) -> float:
+    """The cost of an edge whose :func:`ec_key` is ``key``."""
+    if isinstance(edge, np.ndarray):
+        return key
+    return _rounded(math.sqrt(key), edge[1], edge[2])
+
+
+@overload(ec_key)
+def _ec_key(edge, a, b):
+    if isinstance(edge, types.Array):
+        return lambda edge, a, b: edge[a, b]
+
+    def from_points(edge, a, b):
+        xy = edge[0]
+        dx = xy[a, 0] - xy[b, 0]
+        dy = xy[a, 1] - xy[b, 1]
+        return dx * dx + dy * dy
+
+    return from_points
+
+
+@overload(ec_of_key)
+def _ec_of_key(edge, key):
+    if isinstance(edge, types.Array):
+        return lambda edge, key: key
+
+    def from_points(edge, key):
+        r = np.sqrt(key)
+        if edge[1] == 2:
+            return edge[2] * np.floor(r + 0.5)
+        if edge[1] == 3:
+            return edge[2] * np.ceil(r)
+        return edge[2] * r
 
     return from_points
 

@@ -15,7 +15,7 @@ answers, much slower).
 from __future__ import annotations
 
 import numpy as np
-from gtsp_bench.solvers.heuristics.lns_costs import ec
+from gtsp_bench.solvers.heuristics.lns_costs import ec, ec_key, ec_of_key
 from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported for callers)
     local_search,
     move_opt,
@@ -319,7 +319,8 @@ def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 @njit(cache=True)
 def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``(k, k)``: the least ``ec(edge, i, j)`` from a node of each cluster to a node of each other
-    (one pass over the matrix, row by row)."""
+    (one pass over the matrix, row by row; on points, over squared distances, rounded once per
+    pair of clusters: :func:`~gtsp_bench.solvers.heuristics.lns_costs.ec_key`)."""
     k = len(start) - 1
     dist = np.full((k, k), np.inf)
     for c in range(k):
@@ -327,9 +328,13 @@ def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
             for d in range(k):
                 low = dist[c, d]
                 for j in range(start[d], start[d + 1]):
-                    if ec(edge, i, j) < low:
-                        low = ec(edge, i, j)
+                    key = ec_key(edge, i, j)
+                    if key < low:
+                        low = key
                 dist[c, d] = low
+    for c in range(k):
+        for d in range(k):
+            dist[c, d] = ec_of_key(edge, dist[c, d])
     return dist
 
 
