@@ -62,7 +62,9 @@ REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.RE
 MAX_HEAT = 8.0
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
-#: With ``fit_trials``, a trial still runs at least this many iterations per cluster.
+#: With ``fit_trials``, a trial still runs at least this many iterations per cluster (up to
+#: ``LARGE`` clusters; above, its whole ``iterations``: there an annealing run of 10 iterations per
+#: cluster ended about where it began, and longer ones went further).
 FIT_FLOOR = 10
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
@@ -213,6 +215,7 @@ class _Search:
         best, best_cost = self.local_search(greedy_tour(p, anchor_node(p)))
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
+        floor = FIT_FLOOR * n if n <= LARGE else iterations  # a fitted trial's least length
         done = best_at = trials = 0
         # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
         converged = exact = n < 4
@@ -262,7 +265,7 @@ class _Search:
                     now = time.perf_counter()
                     rate = done / max(now - clock0, 1e-9)
                     left = rate * max(0.0, deadline - now)
-                    share = max(FIT_FLOOR * n, rate * (deadline - clock0) / s.fit_trials)
+                    share = max(floor, rate * (deadline - clock0) / s.fit_trials)
                     settings[0] = min(iterations, max(counts[0] + 1, int(min(counts[0] + left, share))))
                     ended = counts[0] >= settings[0]
                 if ended:
@@ -336,6 +339,8 @@ class Lns:
         With ``fit_to_time``, trials are also short enough (at the rate so far) for this many to
         fit in the time limit, but at least ``FIT_FLOOR`` iterations per cluster (>= 1, default
         32): on a short budget, more and shorter trials, so that the cold restarts come in time.
+        Above ``LARGE`` clusters only the time limit shortens a trial (trials of 10 iterations per
+        cluster ended there about where they began).
     points
         Compute each edge cost from the coordinates where it is needed instead of reading the
         cost matrix (:mod:`gtsp_bench.solvers.heuristics.lns_costs`; the same numbers, so the same
