@@ -68,7 +68,7 @@ def test_quadrant_neighbours_hold_the_nearest_of_each_quadrant(seed):
     k, count = p.n_clusters, 8
     centre = np.array([p.instance.coords[c[0]] if c[0] < len(p.instance.coords) else p.instance.depot
                        for c in p.clusters])  # any point per cluster will do for the test
-    near = kernels.quadrant_neighbours(p.edge_cost, start, count, centre)
+    near = kernels.neighbours(p.edge_cost, start, count, centre)
     dist = np.array([[p.edge_cost[np.ix_(p.clusters[c], p.clusters[o])].min() for o in range(k)]
                      for c in range(k)])
     for c in range(k):

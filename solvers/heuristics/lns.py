@@ -196,7 +196,7 @@ class _Search:
             self.near = kernels.neighbours(self.edge, self.start, count)
         else:
             centre = np.add.reduceat(points[0], self.start[:-1], axis=0) / np.diff(self.start)[:, None]
-            self.near = kernels.quadrant_neighbours(self.edge, self.start, count, centre)
+            self.near = kernels.neighbours(self.edge, self.start, count, centre)
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
 

@@ -9,10 +9,11 @@ The kernels read the cost of the edge from node ``a`` to node ``b`` as ``ec(edge
   where it is needed, with the same operations as :func:`gtsp_bench.instance.pair_distances` and
   :func:`gtsp_bench.problem.price`, so the same number as the matrix holds.
 
-numba compiles each kernel once per kind (both kinds are in its cache). On a large instance the
-points are the faster kind: a 15,112-node matrix takes 1.8 GB, and the search reads it at
-scattered rows, nearly every read a cache miss; the coordinates fit in the cache, and the matrix
-is never built.
+numba compiles each kernel once per kind (both kinds are in its cache; the cache is keyed on each
+kernel's own file, so after editing this module delete ``solvers/heuristics/__pycache__/*.nbi``).
+On a large instance the points are the faster kind: a 15,112-node matrix takes 1.8 GB, and the
+search reads it at scattered rows, nearly every read a cache miss; the coordinates fit in the
+cache, and the matrix is never built.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import math
 
 import numpy as np
 from numba import types
-from numba.extending import overload
+from numba.extending import overload, register_jitable
 
 from gtsp_bench.problem import Problem
 
@@ -34,49 +35,9 @@ POINTS_FROM = 2000
 Points = tuple[np.ndarray, int, float]
 
 
-def _rounded(r: float, rule: int, scale: float) -> float:
-    if rule == 2:
-        return scale * math.floor(r + 0.5)
-    if rule == 3:
-        return scale * math.ceil(r)
-    return scale * r
-
-
-def _planar(xy: np.ndarray, rule: int, scale: float, a: int, b: int) -> float:
-    dx = xy[a, 0] - xy[b, 0]
-    dy = xy[a, 1] - xy[b, 1]
-    return _rounded(math.sqrt(dx * dx + dy * dy), rule, scale)
-
-
-def ec(edge: np.ndarray | Points, a: int, b: int) -> float:
-    """The cost of the edge from node ``a`` to node ``b`` (a matrix entry, or computed from points)."""
-    if isinstance(edge, np.ndarray):
-        return float(edge[a, b])
-    return _planar(edge[0], edge[1], edge[2], a, b)
-
-
-@overload(ec)
-def _ec(edge, a, b):
-    if isinstance(edge, types.Array):
-        return lambda edge, a, b: edge[a, b]
-
-    def from_points(edge, a, b):
-        xy, rule, scale = edge
-        dx = xy[a, 0] - xy[b, 0]
-        dy = xy[a, 1] - xy[b, 1]
-        r = np.sqrt(dx * dx + dy * dy)
-        if rule == 2:
-            return scale * np.floor(r + 0.5)
-        if rule == 3:
-            return scale * np.ceil(r)
-        return scale * r
-
-    return from_points
-
-
 def ec_key(edge: np.ndarray | Points, a: int, b: int) -> float:
-    """A key that orders edges as their costs do (a matrix entry, or a squared distance): the
-    least cost of many edges is ``ec_of_key(edge, least key)``, with one root and rounding."""
+    """A key that orders edges as their costs do: the matrix entry, or the squared distance (the
+    least cost of many edges is then ``ec_of_key(edge, least key)``, one root and rounding)."""
     if isinstance(edge, np.ndarray):
         return float(edge[a, b])
     xy = edge[0]
@@ -86,10 +47,16 @@ def ec_key(edge: np.ndarray | Points, a: int, b: int) -> float:
 
 
 def ec_of_key(edge: np.ndarray | Points, key: float) -> float:
-    """The cost of an edge whose :func:`ec_key` is ``key``."""
+    """The cost of an edge whose :func:`ec_key` is ``key``: the key itself on a matrix, else the
+    factor times the rule's rounding of its root."""
     if isinstance(edge, np.ndarray):
         return key
-    return _rounded(math.sqrt(key), edge[1], edge[2])
+    r = math.sqrt(key)
+    if edge[1] == 2:
+        return edge[2] * math.floor(r + 0.5)
+    if edge[1] == 3:
+        return edge[2] * math.ceil(r)
+    return edge[2] * r
 
 
 @overload(ec_key)
@@ -120,6 +87,13 @@ def _ec_of_key(edge, key):
         return edge[2] * r
 
     return from_points
+
+
+@register_jitable
+def ec(edge: np.ndarray | Points, a: int, b: int) -> float:
+    """The cost of the edge from node ``a`` to node ``b``: a matrix entry, or computed from points
+    (compiled inside the kernels that call it, or plain Python)."""
+    return ec_of_key(edge, ec_key(edge, a, b))
 
 
 def points_of(problem: Problem) -> Points | None:

@@ -338,25 +338,9 @@ def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
     return dist
 
 
-def neighbours(edge: np.ndarray, start: np.ndarray, count: int) -> np.ndarray:
-    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least edge cost
-    between any of their nodes, in either direction), nearest first."""
-    k = len(start) - 1
-    count = min(count, k - 1)
-    if count <= 0:
-        return np.zeros((k, 0), dtype=np.int64)
-    dist = cluster_distances(edge, start)
-    dist = np.minimum(dist, dist.T)
-    np.fill_diagonal(dist, np.inf)
-    near = np.argpartition(dist, count - 1, axis=1)[:, :count]
-    rows = np.arange(k)[:, None]
-    order = np.argsort(dist[rows, near], axis=1, kind="stable")
-    return np.ascontiguousarray(near[rows, order], dtype=np.int64)
-
-
 @njit(cache=True)
 def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadrant: int) -> np.ndarray:
-    """The rows of :func:`quadrant_neighbours` (``dist`` with an infinite diagonal)."""
+    """The rows of :func:`neighbours` with centres (``dist`` with an infinite diagonal)."""
     k = len(dist)
     near = np.empty((k, count), dtype=np.int64)
     for c in range(k):
@@ -398,12 +382,16 @@ def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadran
     return near
 
 
-def quadrant_neighbours(edge: np.ndarray, start: np.ndarray, count: int,
-                        centre: np.ndarray) -> np.ndarray:
-    """Like :func:`neighbours`, but with the ``count // 4`` nearest clusters in each quadrant
-    around a cluster's centre ``centre[c]`` among them (the rest the nearest of all), nearest
-    first: on clustered instances the nearest clusters all lie in one group, and a move that joins
-    two groups would never be tried (Johnson and McGeoch's quadrant neighbours)."""
+def neighbours(edge: np.ndarray, start: np.ndarray, count: int,
+               centre: np.ndarray | None = None) -> np.ndarray:
+    """``(k, min(count, k - 1))``: for each cluster, the clusters nearest it (least edge cost
+    between any of their nodes, in either direction), nearest first.
+
+    With ``centre`` (a point per cluster), the ``count // 4`` nearest clusters in each quadrant
+    around ``centre[c]`` are among them, the rest the nearest of all: on clustered instances the
+    nearest clusters all lie in one group, and a move that joins two groups would never be tried
+    (Johnson and McGeoch's quadrant neighbours).
+    """
     k = len(start) - 1
     count = min(count, k - 1)
     if count <= 0:
@@ -411,7 +399,12 @@ def quadrant_neighbours(edge: np.ndarray, start: np.ndarray, count: int,
     dist = cluster_distances(edge, start)
     dist = np.minimum(dist, dist.T)
     np.fill_diagonal(dist, np.inf)
-    return _quadrant_rows(dist, np.ascontiguousarray(centre, dtype=np.float64), count, count // 4)
+    if centre is not None:
+        return _quadrant_rows(dist, np.ascontiguousarray(centre, dtype=np.float64), count, count // 4)
+    near = np.argpartition(dist, count - 1, axis=1)[:, :count]
+    rows = np.arange(k)[:, None]
+    order = np.argsort(dist[rows, near], axis=1, kind="stable")
+    return np.ascontiguousarray(near[rows, order], dtype=np.int64)
 
 
 def warm_up() -> None:
@@ -428,7 +421,7 @@ def warm_up() -> None:
     points.setflags(write=False)  # as lns_costs.points_of leaves them
     for costs in (edge, (points, 1, 1.0)):  # the two kinds of lns_costs
         near = neighbours(costs, start, 3)
-        quadrant_neighbours(costs, start, 4, np.column_stack([xy[::2], xy[1::2]]))
+        neighbours(costs, start, 4, np.column_stack([xy[::2], xy[1::2]]))
         t = np.arange(0, 12, 2, dtype=np.int64)
         for how in range(len(REMOVALS)):
             for half in (0, 1):
