@@ -159,7 +159,8 @@ class LpModel:
         self.cols = np.concatenate([self.cols, cols])
 
     def add_cuts(self, cuts: Cuts) -> None:
-        """Add cut rows over the columns present."""
+        """Add cut rows over the columns present (each side in its sparser form over them)."""
+        cuts = cuts.sparsest(self.model, self.cols)
         matrix = sp.csr_array(cuts.matrix(self.model, self.cols))
         self.backend.add_rows(matrix, np.full(len(cuts), -np.inf), cuts.rhs)
         self.cuts = Cuts.stack([self.cuts, cuts])

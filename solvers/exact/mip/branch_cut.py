@@ -25,6 +25,7 @@ from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.prune import prune_heads
+from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
 from gtsp_bench.solvers.heads import optimal_heads
 from gtsp_bench.solvers.heuristics import lns_kernels
 
@@ -561,6 +562,7 @@ class MipSolver:
                                   core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
         # compiled or loaded here (a worker's start-up), not in a solve's clock
         flow.warm_up()
+        prune_warm_up()
         lns_kernels.warm_up()
 
     def backend(self, options: MipOptions) -> Backend:
