@@ -495,6 +495,8 @@ def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True,
             if key in seen:
                 continue
             seen.add(key)
+            if flow.teeth_violation(z, handle) <= TOL:  # (compiled: tens of thousands a round)
+                continue
             violation, inner, outer = _best_teeth(z, handle)
             if violation > TOL:
                 sides = [np.isin(model.cluster, np.flatnonzero(handle))]
