@@ -530,6 +530,7 @@ def solve_exact(
         else:
             search.branch_and_cut()
     stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
+    stats["lp_stalls"] = getattr(search.lp.backend, "stalls", 0)
     lower = search.lb
     if search.model.integral_costs and math.isfinite(lower):
         lower = math.ceil(lower - 1e-7)  # every tour costs an integer
