@@ -24,9 +24,9 @@ from gtsp_bench.errors import InputError
 
 #: Fewest simplex iterations after which a HiGHS run counts as stalled (see
 #: :meth:`HighsBackend.solve_lp`).
-STALL_ITERATIONS = 20_000
+STALL_ITERATIONS = 10_000
 #: ... or this many per row and column, if more.
-STALL_PER_LINE = 2
+STALL_PER_LINE = 1
 #: gurobipy's error code for a model above the size-limited licence.
 _SIZE_LIMIT_ERROR = 10010
 
@@ -109,8 +109,11 @@ class Backend(Protocol):
         """Change column bounds."""
         ...
 
-    def solve_lp(self, time_limit: float, cutoff: float = math.inf) -> LpResult:
-        """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``."""
+    def solve_lp(self, time_limit: float, cutoff: float = math.inf,
+                 iterations: int | None = None) -> LpResult:
+        """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``, and
+        stops after ``iterations`` simplex iterations if given (status ``"stopped"``; the
+        objective, if finite, is the solver's value there: a guide, not a bound)."""
         ...
 
 
@@ -271,26 +274,33 @@ class HighsBackend:
         self.h.run()
         return self.h.getModelStatus()
 
-    def solve_lp(self, time_limit: float, cutoff: float = np.inf) -> LpResult:
-        """Solve the LP relaxation (from the previous basis).
+    def solve_lp(self, time_limit: float, cutoff: float = np.inf,
+                 iterations: int | None = None) -> LpResult:
+        """Solve the LP relaxation (from the previous basis); stopped after ``iterations`` simplex
+        iterations if given (status ``"stopped"``, objective the dual simplex's value there).
 
         A run that takes more than :data:`STALL_ITERATIONS` (or :data:`STALL_PER_LINE` per row and column)
-        simplex iterations is stopped and started again from its basis with HiGHS's solver state
-        cleared: at UAV K = 50 one branch-and-cut LP, hot-started after strong branching, ran
+        simplex iterations is stopped and started again from the basis it started from, with HiGHS's
+        solver state cleared: at UAV K = 50 one branch-and-cut LP, hot-started after strong branching, ran
         245,000 iterations (490 s) where the same LP and basis read from files took 4,600 (3 s).
         A second stall starts from no basis, with no limit but the time.
         """
         self._set_time_limit(time_limit)
         self.h.setOptionValue("objective_bound", float(cutoff))
         limit = max(STALL_ITERATIONS, STALL_PER_LINE * (self.h.getNumRow() + self.h.getNumCol()))
+        if iterations is not None:
+            limit = min(limit, iterations)
+        start = self.h.getBasis()
         status = self._run(limit)
-        if status == self._hs.HighsModelStatus.kIterationLimit:
+        stopped = self._hs.HighsModelStatus.kIterationLimit
+        if status == stopped and iterations is not None and iterations <= limit:
+            return LpResult("stopped", self.h.getInfo().objective_function_value)
+        if status == stopped:
             self.stalls += 1
-            basis = self.h.getBasis()
             self.h.clearSolver()
-            self.h.setBasis(basis)
+            self.h.setBasis(start)
             status = self._run(limit)
-            if status == self._hs.HighsModelStatus.kIterationLimit:
+            if status == stopped:
                 self.h.clearSolver()
                 status = self._run(2**31 - 1)
         if status == self._hs.HighsModelStatus.kInfeasible:
@@ -382,10 +392,12 @@ class GurobiBackend:
                     "for Gurobi's size-limited licence (2000 each); use 'milp'") from None
             raise
 
-    def solve_lp(self, time_limit: float, cutoff: float = np.inf) -> LpResult:
-        """Solve the LP relaxation."""
+    def solve_lp(self, time_limit: float, cutoff: float = np.inf,
+                 iterations: int | None = None) -> LpResult:
+        """Solve the LP relaxation (at most ``iterations`` simplex iterations if given)."""
         grb = self.gp.GRB
         self.m.Params.TimeLimit = min(max(time_limit, 0.0), 1e100)  # left() may be just below 0
+        self.m.Params.IterationLimit = grb.INFINITY if iterations is None else float(iterations)
         self.m.Params.Cutoff = cutoff if np.isfinite(cutoff) else grb.INFINITY
         self._optimize()
         status = self.m.Status
