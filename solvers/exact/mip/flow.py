@@ -1,4 +1,5 @@
-"""Compiled maximum flow and residual reachability for the subtour separation (numba, ``cache=True``).
+"""Compiled kernels of the separation (numba, ``cache=True``): maximum flow and residual
+reachability for the subtour rows, and the blossom violation of a handle.
 
 The separation of :mod:`gtsp_bench.solvers.exact.mip.separation` runs one max-flow per cluster
 on a support graph of at most a few hundred nodes. scipy's ``maximum_flow`` spends almost all
