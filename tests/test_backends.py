@@ -109,3 +109,28 @@ def test_dropped_columns_leave_the_backend_and_the_lp_equals_them_fixed_to_zero(
     after = lp.backend.solve_lp(60.0)
     np.testing.assert_allclose(after.objective, fixed.backend.solve_lp(60.0).objective, rtol=1e-9)
     np.testing.assert_allclose(lp.reduced_costs(after.duals, lp.cols), after.reduced_costs, atol=1e-7)
+
+
+def test_a_stalled_run_restarts_and_reaches_the_same_optimum(monkeypatch):
+    """With a stall limit of one iteration, each LP run stops, restarts from its basis with the
+    solver state cleared, stops again and is solved from no basis: the same optimum as without
+    the limit, and the stalls are counted."""
+    from gtsp_bench.solvers.exact.mip import backends
+
+    plain, _ = _lp(HighsBackend, seed=4)
+    stalled, _ = _lp(HighsBackend, seed=4)
+    for _ in range(3):
+        expected = plain.backend.solve_lp(60.0)
+        with monkeypatch.context() as m:
+            m.setattr(backends, "STALL_ITERATIONS", 1)
+            m.setattr(backends, "STALL_PER_LINE", 0)
+            res = stalled.backend.solve_lp(60.0)
+        assert res.status == expected.status == "optimal"
+        np.testing.assert_allclose(res.objective, expected.objective, rtol=1e-9)
+        cuts = separate(plain.model, plain.full(expected.values))
+        if cuts is None:
+            break
+        plain.add_cuts(cuts)
+        stalled.add_cuts(cuts)
+    assert stalled.backend.stalls > 0
+    assert plain.backend.stalls == 0

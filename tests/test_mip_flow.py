@@ -58,3 +58,22 @@ def test_reach_forward_and_backward():
     assert flow.reach(net.indptr, net.indices, net.rev, residual, 0, False).tolist() == [True] * 3
     assert flow.reach(net.indptr, net.indices, net.rev, residual, 2, True).tolist() == [True] * 3
     assert flow.reach(net.indptr, net.indices, net.rev, residual, 1, False).tolist() == [False, True, True]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_teeth_violation_matches_best_teeth(seed):
+    """The compiled blossom violation equals the one of ``_best_teeth`` (which gives the teeth),
+    on random symmetric cluster tours with half-integral and arbitrary values, either parity."""
+    from gtsp_bench.solvers.exact.mip.separation import _best_teeth
+
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(4, 15))
+    z = rng.choice([0.0, 0.5, 1.0], size=(m, m)) if seed % 2 else rng.uniform(0, 1, (m, m))
+    z = np.triu(z, 1)
+    z += z.T
+    for _ in range(5):
+        handle = rng.uniform(size=m) < 0.5
+        if handle.all() or not handle.any():
+            continue
+        expected = _best_teeth(z, handle)[0]
+        assert flow.teeth_violation(z, handle) == pytest.approx(expected, abs=1e-12)

@@ -74,3 +74,22 @@ def test_past_deadline_stops_early_and_keeps_everything():
     problem = price(generate_instance(5, 6, seed=1), 0.5)
     kept = prune_heads(problem, deadline=0.0)
     assert [len(k) for k in kept] == [len(c) for c in problem.clusters]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_cheapest_kernel_matches_a_plain_argmin(seed):
+    """The compiled kernel marks exactly the first cheapest head of every neighbour pair of two
+    different clusters (integer costs: many ties)."""
+    from gtsp_bench.solvers.exact.prune import _cheapest_kernel
+
+    rng = np.random.default_rng(seed)
+    n, a_count = int(rng.integers(1, 8)), int(rng.integers(2, 30))
+    to_neigh = rng.integers(0, 5, (n, a_count)).astype(float)
+    node = rng.integers(0, 3, n).astype(float)
+    cluster = np.sort(rng.integers(0, 4, a_count))
+    expected = np.zeros(n, dtype=bool)
+    for a in range(a_count):
+        for b in range(a + 1, a_count):
+            if cluster[a] != cluster[b]:
+                expected[np.argmin(node + to_neigh[:, a] + to_neigh[:, b])] = True
+    np.testing.assert_array_equal(_cheapest_kernel(to_neigh, node, cluster), expected)

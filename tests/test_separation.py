@@ -110,6 +110,40 @@ def test_stack_select_and_matrix_keep_rows_with_several_sides():
         np.testing.assert_allclose(on_y, duals @ cuts.ycoef)
 
 
+def test_sparsest_form_is_the_same_row_on_every_tour_with_fewer_nonzeros():
+    """Sides rewritten over their crossing edges give the same left-hand side at every tour
+    (the degree rows hold there), no more nonzeros over the columns it was chosen for, and dual
+    weights (both ways) equal to the duals times the new coefficients."""
+    from gtsp_bench.solvers.exact.mip.separation import subtour_cut
+
+    model = _model(7, k=5, max_size=3)
+    rng = np.random.default_rng(4)
+    n = model.n_nodes
+    tours = _all_tours(model)
+    blocks = [subtour_cut(model, rng.random(n) < p, 0, 1) for p in (0.2, 0.5, 0.8, 0.9)]
+    blocks.append(Cuts.one(rng.random((4, n)) < 0.6, np.zeros(n), 2.5))  # several sides
+    cuts = Cuts.stack(blocks)
+    turned = 0
+    some = np.concatenate([np.arange(n), n + np.arange(0, len(model.tail), 3)])
+    for cols in (np.arange(model.n_cols), some):
+        sparse = cuts.sparsest(model, cols)
+        turned += int(sparse.cross.sum())
+        full = np.arange(model.n_cols)
+        np.testing.assert_allclose(sparse.matrix(model, full) @ tours.T, cuts.matrix(model, full) @ tours.T,
+                                   atol=1e-9)
+        np.testing.assert_allclose(sparse.slack(model, tours[0]), cuts.slack(model, tours[0]), atol=1e-9)
+        single = np.arange(len(cuts)) < len(blocks) - 1  # the rows of one side
+        before = np.count_nonzero(cuts.matrix(model, cols)[single], axis=1)
+        after = np.count_nonzero(sparse.matrix(model, cols)[single], axis=1)
+        assert np.all(after <= before)
+        duals = -rng.random(len(cuts))
+        for edges in (np.arange(len(model.tail)), np.arange(0, len(model.tail), 7)):
+            on_edge, on_y = sparse.dual_weights(model, duals, edges)
+            np.testing.assert_allclose(on_edge, duals @ sparse.matrix(model, n + edges), atol=1e-12)
+            np.testing.assert_allclose(on_y, duals @ sparse.ycoef, atol=1e-12)
+    assert turned > 0
+
+
 def test_generalized_subtour_cut_holds_for_every_tour_and_is_tight():
     """``Subtour(S, C, D)`` for random node sets (splitting clusters, on either side's form)
     holds for every tour, and some tour with its heads of C inside S and of D outside meets it

@@ -1,4 +1,5 @@
-"""Compiled maximum flow and residual reachability for the subtour separation (numba, ``cache=True``).
+"""Compiled kernels of the separation (numba, ``cache=True``): maximum flow and residual
+reachability for the subtour rows, and the blossom violation of a handle.
 
 The separation of :mod:`gtsp_bench.solvers.exact.mip.separation` runs one max-flow per cluster
 on a support graph of at most a few hundred nodes. scipy's ``maximum_flow`` spends almost all
@@ -105,6 +106,37 @@ def reach(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np
     return level >= 0
 
 
+@njit(cache=True)
+def teeth_violation(z: np.ndarray, handle: np.ndarray) -> float:
+    """The violation of the most violated blossom with this handle (clusters) over the cluster
+    tour ``z`` (``(m, m)``, symmetric), as
+    :func:`gtsp_bench.solvers.exact.mip.separation._best_teeth` computes it (which gives the
+    teeth): teeth are the edges leaving the handle with ``z > 1/2``, parity mended by the edge
+    whose ``z`` is closest to 1/2 (the first in row-major order of inner, outer clusters)."""
+    m = len(handle)
+    slack = 0.0
+    teeth = 0
+    closest = np.inf
+    for i in range(m):
+        if not handle[i]:
+            continue
+        for j in range(m):
+            if handle[j]:
+                continue
+            c = z[i, j]
+            if c > 0.5:
+                teeth += 1
+                slack += 1 - c
+            else:
+                slack += c
+            d = abs(1 - 2 * c)
+            if d < closest:
+                closest = d
+    if teeth % 2 == 0:
+        slack += closest
+    return 1 - slack
+
+
 def warm_up() -> None:
     """Compile (first use on a machine) or load (from numba's cache) the kernels on a tiny
     network, so that a solve's clock does not pay for it."""
@@ -116,3 +148,4 @@ def warm_up() -> None:
     _, flow = max_flow(indptr, indices, row, rev, cap, 0, 2)
     reach(indptr, indices, rev, cap - flow, 0, False)
     reach(indptr, indices, rev, cap - flow, 2, True)
+    teeth_violation(np.full((3, 3), 0.5), np.array([True, False, False]))

@@ -27,25 +27,37 @@ _FLOW_SCALE = 1_000_000
 class Cuts:
     """Cut rows ``sum_{k: row_k = r} x(E(side_k)) + ycoef_r . y <= rhs_r``.
 
-    Most rows have one side; a blossom has its handle and each tooth as sides.
+    Most rows have one side; a blossom has its handle and each tooth as sides. A side may be
+    written over the edges crossing it instead (``cross``): with the degree rows ``x(delta(i)) =
+    2 y_i``, ``x(E(S)) = y(S) - x(delta(S)) / 2``, so the side contributes ``-x(delta(S)) / 2``
+    and ``y(S)`` is part of ``ycoef`` (the same row on the LP's feasible set; fewer nonzeros when
+    ``S`` holds many of the LP's edges, see :meth:`sparsest`).
 
     Attributes
     ----------
     side
         ``(S, n_nodes)`` bool: the edges with both ends in ``side_k`` get coefficient 1 in row
-        ``row[k]`` (summed over a row's sides).
+        ``row[k]`` (summed over a row's sides), or with ``cross[k]``, the edges with one end in
+        it get -1/2.
     row
         ``(S,)`` row of each side.
     ycoef
         ``(R, n_nodes)`` coefficients of the y columns.
     rhs
         ``(R,)`` right-hand sides.
+    cross
+        ``(S,)`` bool: the side is written over its crossing edges (``None``: none is).
     """
 
     side: np.ndarray
     row: np.ndarray
     ycoef: np.ndarray
     rhs: np.ndarray
+    cross: np.ndarray = None  # type: ignore[assignment]  # set in __post_init__
+
+    def __post_init__(self) -> None:
+        if self.cross is None:
+            object.__setattr__(self, "cross", np.zeros(len(self.row), dtype=bool))
 
     def __len__(self) -> int:
         return len(self.rhs)
@@ -61,7 +73,7 @@ class Cuts:
         """One row from its sides ``(k, n_nodes)`` (or a single side ``(n_nodes,)``)."""
         sides = np.atleast_2d(sides)
         return Cuts(sides.copy(), np.zeros(len(sides), np.int64), ycoef[None, :].astype(float),
-                    np.array([float(rhs)]))
+                    np.array([float(rhs)]), np.zeros(len(sides), dtype=bool))
 
     @staticmethod
     def stack(blocks: Sequence[Cuts]) -> Cuts:
@@ -69,13 +81,44 @@ class Cuts:
         offsets = np.cumsum([0] + [len(b) for b in blocks[:-1]])
         return Cuts(np.concatenate([b.side for b in blocks]),
                     np.concatenate([b.row + o for b, o in zip(blocks, offsets, strict=True)]),
-                    np.concatenate([b.ycoef for b in blocks]), np.concatenate([b.rhs for b in blocks]))
+                    np.concatenate([b.ycoef for b in blocks]), np.concatenate([b.rhs for b in blocks]),
+                    np.concatenate([b.cross for b in blocks]))
 
     def select(self, mask: np.ndarray) -> Cuts:
         """The cuts where ``mask`` (one entry per row) is true."""
         renumber = np.cumsum(mask) - 1
         keep = mask[self.row]
-        return Cuts(self.side[keep], renumber[self.row[keep]], self.ycoef[mask], self.rhs[mask])
+        return Cuts(self.side[keep], renumber[self.row[keep]], self.ycoef[mask], self.rhs[mask],
+                    self.cross[keep])
+
+    def _edge_coef(self, sides: np.ndarray, tails: np.ndarray, heads: np.ndarray) -> np.ndarray:
+        """Coefficients ``(len(sides), len(tails))`` of edges ``(tails, heads)`` per side
+        (indices into the sides)."""
+        s = self.side[sides]
+        st, sh = s[:, tails], s[:, heads]
+        cross = self.cross[sides]
+        if not cross.any():
+            return st & sh
+        return np.where(cross[:, None], -0.5 * (st ^ sh), st & sh)
+
+    def sparsest(self, model: GtspModel, cols: np.ndarray) -> Cuts:
+        """The same rows, each side (not yet crossing) written over its crossing edges where that
+        has fewer nonzeros over columns ``cols`` (its inside edges against its crossing edges and
+        the y entries it adds)."""
+        n = model.n_nodes
+        es = cols[cols >= n] - n
+        st, sh = self.side[:, model.tail[es]], self.side[:, model.head[es]]
+        inside = (st & sh).sum(axis=1)
+        crossing = (st ^ sh).sum(axis=1)
+        y_now = self.ycoef[self.row] != 0
+        y_after = (self.ycoef[self.row] + self.side) != 0
+        extra = y_after.sum(axis=1) - y_now.sum(axis=1)
+        turn = ~self.cross & (crossing + extra < inside)
+        if not turn.any():
+            return self
+        ycoef = self.ycoef.copy()
+        np.add.at(ycoef, self.row[turn], self.side[turn].astype(float))
+        return Cuts(self.side, self.row, ycoef, self.rhs, self.cross | turn)
 
     def _per_row(self, per_side: np.ndarray) -> np.ndarray:
         """Sum ``per_side`` (first axis: sides) over each row's sides."""
@@ -93,7 +136,8 @@ class Cuts:
         out = np.empty((len(self), len(cols)))
         out[:, is_y] = self.ycoef[:, cols[is_y]]
         es = cols[~is_y] - n
-        out[:, ~is_y] = self._per_row(self.side[:, model.tail[es]] & self.side[:, model.head[es]])
+        every = np.arange(len(self.row))
+        out[:, ~is_y] = self._per_row(self._edge_coef(every, model.tail[es], model.head[es]))
         return out
 
     def slack(self, model: GtspModel, values: np.ndarray) -> np.ndarray:
@@ -102,7 +146,7 @@ class Cuts:
         # x(E(side)) over the support only (an LP point has a few edges per node, the model up
         # to millions: over every edge this took 3.7 s a call at K = 100)
         sup = np.flatnonzero(x)
-        inside = (self.side[:, model.tail[sup]] & self.side[:, model.head[sup]]) @ x[sup]
+        inside = self._edge_coef(np.arange(len(self.row)), model.tail[sup], model.head[sup]) @ x[sup]
         return self.rhs - self._per_row(inside) - self.ycoef @ y
 
     def dual_weights(
@@ -112,13 +156,16 @@ class Cuts:
         nz = np.flatnonzero(np.abs(duals[self.row]) > 1e-12)
         rows = np.flatnonzero(np.abs(duals) > 1e-12)
         on_y = duals[rows] @ self.ycoef[rows]
-        s = self.side[nz]
+        d = duals[self.row[nz]]
         if len(edges) * len(nz) < model.n_nodes**2 * 4:  # few edges: side by side
-            both = s[:, model.tail[edges]] & s[:, model.head[edges]]
-            return duals[self.row[nz]] @ both, on_y
-        sf = s.astype(float)
-        pair = (sf * duals[self.row[nz], None]).T @ sf  # (n, n): duals of the sides holding i, j
-        return pair[model.tail[edges], model.head[edges]], on_y
+            return d @ self._edge_coef(nz, model.tail[edges], model.head[edges]), on_y
+        # (n, n): duals of the sides holding i and j; a crossing side's -1/2 (s_i + s_j) + s_i s_j
+        sf = self.side[nz].astype(float)
+        pair = (sf * d[:, None]).T @ sf
+        cross = self.cross[nz]
+        half = -0.5 * (d[cross] @ sf[cross]) if cross.any() else np.zeros(model.n_nodes)
+        t, h = model.tail[edges], model.head[edges]
+        return pair[t, h] + half[t] + half[h], on_y
 
 
 def subtour_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
@@ -448,6 +495,8 @@ def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True,
             if key in seen:
                 continue
             seen.add(key)
+            if flow.teeth_violation(z, handle) <= TOL:  # (compiled: tens of thousands a round)
+                continue
             violation, inner, outer = _best_teeth(z, handle)
             if violation > TOL:
                 sides = [np.isin(model.cluster, np.flatnonzero(handle))]
