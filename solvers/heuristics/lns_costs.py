@@ -18,8 +18,6 @@ cache, and the matrix is never built.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import types
 from numba.extending import overload, register_jitable
@@ -35,15 +33,29 @@ POINTS_FROM = 2000
 Points = tuple[np.ndarray, int, float]
 
 
+@register_jitable
+def _squared(xy: np.ndarray, a: int, b: int) -> float:
+    dx = xy[a, 0] - xy[b, 0]
+    dy = xy[a, 1] - xy[b, 1]
+    return dx * dx + dy * dy
+
+
+@register_jitable
+def _rounded_root(key: float, rule: int, scale: float) -> float:
+    r = np.sqrt(key)
+    if rule == 2:
+        return scale * np.floor(r + 0.5)
+    if rule == 3:
+        return scale * np.ceil(r)
+    return scale * r
+
+
 def ec_key(edge: np.ndarray | Points, a: int, b: int) -> float:
     """A key that orders edges as their costs do: the matrix entry, or the squared distance (the
     least cost of many edges is then ``ec_of_key(edge, least key)``, one root and rounding)."""
     if isinstance(edge, np.ndarray):
         return float(edge[a, b])
-    xy = edge[0]
-    dx = xy[a, 0] - xy[b, 0]
-    dy = xy[a, 1] - xy[b, 1]
-    return dx * dx + dy * dy
+    return _squared(edge[0], a, b)
 
 
 def ec_of_key(edge: np.ndarray | Points, key: float) -> float:
@@ -51,42 +63,21 @@ def ec_of_key(edge: np.ndarray | Points, key: float) -> float:
     factor times the rule's rounding of its root."""
     if isinstance(edge, np.ndarray):
         return key
-    r = math.sqrt(key)
-    if edge[1] == 2:
-        return edge[2] * math.floor(r + 0.5)
-    if edge[1] == 3:
-        return edge[2] * math.ceil(r)
-    return edge[2] * r
+    return float(_rounded_root(key, edge[1], edge[2]))
 
 
 @overload(ec_key)
 def _ec_key(edge, a, b):
     if isinstance(edge, types.Array):
         return lambda edge, a, b: edge[a, b]
-
-    def from_points(edge, a, b):
-        xy = edge[0]
-        dx = xy[a, 0] - xy[b, 0]
-        dy = xy[a, 1] - xy[b, 1]
-        return dx * dx + dy * dy
-
-    return from_points
+    return lambda edge, a, b: _squared(edge[0], a, b)
 
 
 @overload(ec_of_key)
 def _ec_of_key(edge, key):
     if isinstance(edge, types.Array):
         return lambda edge, key: key
-
-    def from_points(edge, key):
-        r = np.sqrt(key)
-        if edge[1] == 2:
-            return edge[2] * np.floor(r + 0.5)
-        if edge[1] == 3:
-            return edge[2] * np.ceil(r)
-        return edge[2] * r
-
-    return from_points
+    return lambda edge, key: _rounded_root(key, edge[1], edge[2])
 
 
 @register_jitable
