@@ -280,7 +280,7 @@ def tour_cost_bound(instance: Any) -> float:
         elif instance.edge_weight_type == "GEOM":
             longest = 20_037_509.0  # the same in metres (GEOM's radius 6,378,388 m)
         else:
-            pts = instance.coords if instance.depot is None else np.vstack([instance.coords, instance.depot])
+            pts = instance.node_points
             lo, hi = pts.min(axis=0), pts.max(axis=0)
             # the box's diagonal bounds every Euclidean distance (ATT's pseudo-Euclidean is
             # shorter), +1 for the TSPLIB rules' rounding up

@@ -163,6 +163,12 @@ class Instance:
         return _frozen_array(np.concatenate(self.clusters))
 
     @cached_property
+    def node_points(self) -> np.ndarray:
+        """The coordinates of every node of the cost matrix, the depot (when there is one) last:
+        ``(n[+1], 2)``, read-only."""
+        return self.coords if self.depot is None else _frozen_array(np.vstack([self.coords, self.depot]))
+
+    @cached_property
     def cluster_of(self) -> np.ndarray:
         """Cluster of each global node, ``(n,)``."""
         return _frozen_array(np.repeat(np.arange(self.n_clusters), self.sizes), np.int64)
@@ -359,9 +365,7 @@ def node_distance_matrix(instance: Instance) -> np.ndarray:
     if instance.edge_weight_type == "EXPLICIT":
         w = np.array(instance.weights, dtype=np.float64)
     else:
-        pts = instance.coords
-        if instance.depot is not None:
-            pts = np.vstack([pts, instance.depot])
+        pts = instance.node_points
         m = len(pts)
         w = np.empty((m, m))
         rule = instance.edge_weight_type

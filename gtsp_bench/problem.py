@@ -108,7 +108,8 @@ class Problem:
         """The costs of the edges ``tails[i] -> heads[i]`` (see :meth:`edge_row`)."""
         if self._from_matrix:
             return self.edge_cost[tails, heads]
-        dist = pair_distances(self._points[tails], self._points[heads], self.instance.edge_weight_type)
+        pts = self.instance.node_points
+        dist = pair_distances(pts[tails], pts[heads], self.instance.edge_weight_type)
         dist[tails == heads] = 0.0
         return dist if self.edge_scale == 1.0 else self.edge_scale * dist
 
@@ -118,19 +119,15 @@ class Problem:
         operations), without building the matrix."""
         if self._from_matrix:
             return self.edge_cost[i]
-        dist = np.empty((1, len(self._points)))
-        planar_rows(self._points, i, self.instance.edge_weight_type, dist)
+        pts = self.instance.node_points
+        dist = np.empty((1, len(pts)))
+        planar_rows(pts, i, self.instance.edge_weight_type, dist)
         dist[0, i] = 0.0
         return dist[0] if self.edge_scale == 1.0 else self.edge_scale * dist[0]
 
     @property
     def _from_matrix(self) -> bool:
         return "edge_cost" in self.__dict__ or self.instance.edge_weight_type not in PLANAR_RULES
-
-    @cached_property
-    def _points(self) -> np.ndarray:
-        pts = self.instance.coords
-        return pts if self.instance.depot is None else np.vstack([pts, self.instance.depot])
 
     def to_tour(self, order: Sequence[int], heads: Sequence[int]) -> np.ndarray:
         """Node ids of a solution's tour, starting at the depot when there is one."""

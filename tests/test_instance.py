@@ -92,7 +92,10 @@ def test_geom_distance_is_great_circle_metres():
 
 
 def test_distance_matrix_puts_the_depot_last(tiny):
-    """The matrix has the depot as its last row and column, zero diagonal, symmetric."""
+    """The matrix has the depot as its last row and column, zero diagonal, symmetric; its points
+    (``node_points``, read-only) are the nodes' then the depot's."""
+    assert tiny.node_points.tolist() == [[0, 300], [400, 300], [300, 0], tiny.depot.tolist()]
+    assert not tiny.node_points.flags.writeable
     w = node_distance_matrix(tiny)
     assert w.shape == (4, 4)
     assert w[3, 0] == 300.0 and w[3, 2] == 300.0

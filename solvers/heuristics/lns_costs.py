@@ -94,10 +94,7 @@ def points_of(problem: Problem) -> Points | None:
     rule = RULES.get(inst.edge_weight_type)
     if rule is None:
         return None
-    xy = inst.coords if inst.depot is None else np.vstack([inst.coords, inst.depot])
-    xy = np.ascontiguousarray(xy, dtype=np.float64)
-    xy.setflags(write=False)
-    return xy, rule, float(problem.edge_scale)
+    return inst.node_points, rule, float(problem.edge_scale)  # float64, contiguous, read-only
 
 
 def kernel_costs(problem: Problem, points: bool | None = None) -> np.ndarray | Points:
