@@ -62,9 +62,23 @@ def test_reach_forward_and_backward():
 
 @pytest.mark.parametrize("seed", range(20))
 def test_teeth_violation_matches_best_teeth(seed):
-    """The compiled blossom violation equals the one of ``_best_teeth`` (which gives the teeth),
-    on random symmetric cluster tours with half-integral and arbitrary values, either parity."""
+    """The compiled blossom violation and ``_best_teeth``'s teeth equal a plain numpy statement of
+    the rule (teeth: edges leaving the handle with z > 1/2, parity mended by the edge closest to
+    1/2, the first in row-major order), on random symmetric cluster tours with half-integral and
+    arbitrary values, either parity."""
     from gtsp_bench.solvers.exact.mip.separation import _best_teeth
+
+    def reference(z, handle):
+        inner, outer = np.flatnonzero(handle), np.flatnonzero(~handle)
+        cut = z[np.ix_(inner, outer)]
+        teeth = cut > 0.5
+        slack = np.where(teeth, 1 - cut, cut).sum()
+        if teeth.sum() % 2 == 0:
+            k = np.unravel_index(np.argmin(np.abs(1 - 2 * cut)), cut.shape)
+            slack += abs(1 - 2 * cut[k])
+            teeth[k] = ~teeth[k]
+        i, j = np.nonzero(teeth)
+        return 1 - slack, inner[i], outer[j]
 
     rng = np.random.default_rng(seed)
     m = int(rng.integers(4, 15))
@@ -75,5 +89,8 @@ def test_teeth_violation_matches_best_teeth(seed):
         handle = rng.uniform(size=m) < 0.5
         if handle.all() or not handle.any():
             continue
-        expected = _best_teeth(z, handle)[0]
-        assert flow.teeth_violation(z, handle) == pytest.approx(expected, abs=1e-12)
+        expected, inner, outer = reference(z, handle)
+        assert flow.teeth_violation(z, handle)[0] == pytest.approx(expected, abs=1e-12)
+        got = _best_teeth(z, handle)
+        assert got[0] == pytest.approx(expected, abs=1e-12)
+        assert got[1].tolist() == inner.tolist() and got[2].tolist() == outer.tolist()

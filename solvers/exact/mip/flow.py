@@ -107,16 +107,18 @@ def reach(indptr: np.ndarray, indices: np.ndarray, rev: np.ndarray, residual: np
 
 
 @njit(cache=True)
-def teeth_violation(z: np.ndarray, handle: np.ndarray) -> float:
+def teeth_violation(z: np.ndarray, handle: np.ndarray) -> tuple[float, int, int]:
     """The violation of the most violated blossom with this handle (clusters) over the cluster
-    tour ``z`` (``(m, m)``, symmetric), as
-    :func:`gtsp_bench.solvers.exact.mip.separation._best_teeth` computes it (which gives the
-    teeth): teeth are the edges leaving the handle with ``z > 1/2``, parity mended by the edge
-    whose ``z`` is closest to 1/2 (the first in row-major order of inner, outer clusters)."""
+    tour ``z`` (``(m, m)``, symmetric), and the edge ``(i, j)`` that mends the teeth's parity
+    (``(-1, -1)`` when they are odd already): teeth are the edges leaving the handle with
+    ``z > 1/2``, parity mended by the edge whose ``z`` is closest to 1/2 (the first in row-major
+    order of inner, outer clusters). :func:`gtsp_bench.solvers.exact.mip.separation._best_teeth`
+    gives the teeth."""
     m = len(handle)
     slack = 0.0
     teeth = 0
     closest = np.inf
+    mend_i, mend_j = -1, -1
     for i in range(m):
         if not handle[i]:
             continue
@@ -131,10 +133,10 @@ def teeth_violation(z: np.ndarray, handle: np.ndarray) -> float:
                 slack += c
             d = abs(1 - 2 * c)
             if d < closest:
-                closest = d
+                closest, mend_i, mend_j = d, i, j
     if teeth % 2 == 0:
-        slack += closest
-    return 1 - slack
+        return 1 - (slack + closest), mend_i, mend_j
+    return 1 - slack, -1, -1
 
 
 def warm_up() -> None:

@@ -421,18 +421,15 @@ def _best_teeth(z: np.ndarray, handle: np.ndarray) -> tuple[float, np.ndarray, n
 
     ``z(delta(H) - F) + sum_F (1 - z_e) >= 1`` for every odd ``F`` (a tour crosses ``H`` an even
     number of times); ``F`` takes the edges with ``z_e > 1/2``, parity mended by the edge whose
-    ``z_e`` is closest to 1/2. Returns the violation (positive: violated) and ``F``'s ends.
+    ``z_e`` is closest to 1/2. Returns the violation (positive: violated;
+    computed by :func:`flow.teeth_violation`) and ``F``'s ends.
     """
-    inner, outer = np.flatnonzero(handle), np.flatnonzero(~handle)
-    cut = z[np.ix_(inner, outer)]
-    teeth = cut > 0.5
-    slack = np.where(teeth, 1 - cut, cut).sum()
-    if teeth.sum() % 2 == 0:
-        k = np.unravel_index(np.argmin(np.abs(1 - 2 * cut)), cut.shape)
-        slack += abs(1 - 2 * cut[k])
-        teeth[k] = ~teeth[k]
-    i, j = np.nonzero(teeth)
-    return 1 - slack, inner[i], outer[j]
+    violation, mend_i, mend_j = flow.teeth_violation(z, handle)
+    teeth = (z > 0.5) & handle[:, None] & ~handle[None, :]
+    if mend_i >= 0:
+        teeth[mend_i, mend_j] = not teeth[mend_i, mend_j]
+    inner, outer = np.nonzero(teeth)
+    return violation, inner, outer
 
 
 def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True,
@@ -495,7 +492,7 @@ def blossom_cuts(model: GtspModel, values: np.ndarray, grow: bool = True,
             if key in seen:
                 continue
             seen.add(key)
-            if flow.teeth_violation(z, handle) <= TOL:  # (compiled: tens of thousands a round)
+            if flow.teeth_violation(z, handle)[0] <= TOL:  # (compiled: tens of thousands a round)
                 continue
             violation, inner, outer = _best_teeth(z, handle)
             if violation > TOL:
