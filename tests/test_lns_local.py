@@ -136,6 +136,61 @@ def test_or_opt_never_worse_and_feasible(seed):
         assert _feasible(p, t) and set(t.tolist()) == heads
         assert np.array_equal(pos[cluster_of[t]], np.arange(len(t)))
         assert p.tour_cost(t) <= before + 1e-9
-        assert moved == (p.tour_cost(t) < before - 1e-9)
-        gained += moved
+        assert (moved > 0.0) == (p.tour_cost(t) < before - 1e-9)
+        assert moved == pytest.approx(before - p.tour_cost(t), rel=1e-9, abs=1e-9)
+        gained += moved > 0.0
     assert gained > 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("directed", [False, True])
+def test_moves_return_their_savings(seed, directed):
+    """2-opt, or-opt and move (all clusters or only the awake ones) each return what they saved,
+    the tour's cost before less after; a large-cycle round returns the cost it leaves, counted
+    from those savings."""
+    if directed:
+        k = 12
+        edge, node, start, cluster_of = _asymmetric_problem(k, seed)
+        near = kernels.neighbours(edge, start, k - 1)
+        rng = np.random.default_rng(seed)
+
+        def fresh():
+            return np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(k)],
+                            dtype=np.int64)
+    else:
+        p, start, cluster_of = _problem(16, 4, seed)
+        edge, node, k = p.edge_cost, p.node_cost, p.n_clusters
+        near = kernels.neighbours(edge, start, 5)
+        rng = np.random.default_rng(seed)
+
+        def fresh():
+            return _random_tour(p, rng)
+
+    def state(t, rows=4):
+        return lns_local.search_state(t, cluster_of, np.ones(k, dtype=bool), rows)
+
+    saved = 0.0
+    moves = [lambda t, pos, act: lns_local.or_opt(t, pos, edge, near, cluster_of, 1e-9, act, not directed),
+             lambda t, pos, act: lns_local.move_opt(t, pos, edge, node, start, near, cluster_of, 1e-9, act,
+                                                    not directed, False),
+             lambda t, pos, act: lns_local.move_opt(t, pos, edge, node, start, near, cluster_of, 1e-9, act,
+                                                    not directed, True)]
+    if not directed:
+        moves.append(lambda t, pos, act: lns_local.two_opt(t, pos, edge, near, cluster_of, 1e-9, act))
+    for move in moves:
+        t = fresh()
+        before = lns_local.tour_cost(t, edge, node)
+        pos, active = state(t)
+        got = move(t, pos, active)
+        after = lns_local.tour_cost(t, edge, node)
+        assert len(set(cluster_of[t].tolist())) == k
+        assert np.array_equal(pos[cluster_of[t]], np.arange(k))
+        assert got == pytest.approx(before - after, rel=1e-9, abs=1e-9)
+        saved += got
+    assert saved > 0.0
+    t = fresh()
+    before = lns_local.tour_cost(t, edge, node)
+    pos, active = state(t)
+    moved, cost = lns_local.move_round(t, pos, edge, node, start, near, cluster_of, 1e-9, active,
+                                       not directed, True, before)
+    assert moved and cost == pytest.approx(lns_local.tour_cost(t, edge, node), rel=1e-9)

@@ -121,6 +121,33 @@ def test_iterate_with_a_window_gives_tours():
                                         near, cluster_of, 1e-9, True, 2)
             assert _feasible(p, new)
             assert cost == pytest.approx(p.tour_cost(new), rel=1e-12)
+            new, cost = kernels.iterate(t, 5, removal, insertion, 0.2, p.edge_cost, p.node_cost, start,
+                                        near, cluster_of, 1e-9, True, 2, p.tour_cost(t))
+            assert _feasible(p, new)
+            assert cost == pytest.approx(p.tour_cost(new), rel=1e-9)
+
+
+@pytest.mark.parametrize("directed", [False, True])
+def test_runs_cost_is_what_the_runs_add(directed):
+    """Taking the marked positions out of a cycle saves exactly ``runs_cost``: runs of one, of
+    several, and one that wraps past the end, on symmetric and directed costs."""
+    if directed:
+        edge, node, start, cluster_of = _asymmetric_problem(12, 4)
+        rng = np.random.default_rng(4)
+        t = np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(12)], dtype=np.int64)
+    else:
+        p, start, cluster_of = _problem(12, 3, 4)
+        edge, node = p.edge_cost, p.node_cost
+        t = _random_tour(p, np.random.default_rng(4))
+    n = len(t)
+    rng = np.random.default_rng(0)
+    masks = [np.isin(np.arange(n), [0, 1, n - 1]), np.isin(np.arange(n), [3]), np.arange(n) < n - 1]
+    masks += [rng.random(n) < 0.4 for _ in range(20)]
+    for marked in masks:
+        if marked.all() or not marked.any():
+            continue
+        saved = lns_local.tour_cost(t, edge, node) - lns_local.tour_cost(t[~marked], edge, node)
+        assert lns_window.runs_cost(t, marked, edge, node) == pytest.approx(saved, rel=1e-12)
 
 
 @pytest.mark.parametrize("how", range(len(kernels.REMOVALS)))

@@ -24,7 +24,7 @@ from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported
     tour_cost,
     two_opt,
 )
-from gtsp_bench.solvers.heuristics.lns_window import local_search_window, remove_near
+from gtsp_bench.solvers.heuristics.lns_window import local_search_window, remove_near, runs_cost
 from numba import njit
 
 #: Removal operators, by index.
@@ -204,11 +204,13 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
 @njit(cache=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
-            tol: float, symmetric: bool, half: int) -> tuple[np.ndarray, float]:
+            tol: float, symmetric: bool, half: int, cost: float = np.nan) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
     (waking the inserted clusters). With ``half`` > 0, the large-cycle path of
     :mod:`gtsp_bench.solvers.heuristics.lns_window`: its removals (when ``8 k`` is below the
-    cycle's length) and its windowed re-opt; else the full re-opt."""
+    cycle's length) and its windowed re-opt, and given ``t``'s ``cost``, the new cost counted from
+    it by what each step changed (equal up to rounding) instead of pricing the whole tour; else
+    the full re-opt."""
     if half > 0 and 8 * k < len(t):
         drop = remove_near(t, k, removal, edge, node, near, cluster_of)
     else:
@@ -219,7 +221,10 @@ def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, e
     awake = np.zeros(len(t), dtype=np.bool_)
     awake[clusters] = True
     if half > 0:
-        cost = local_search_window(new, edge, node, start, near, cluster_of, tol, awake, symmetric, half)
+        if not np.isnan(cost):
+            cost += runs_cost(new, awake[cluster_of[new]], edge, node) - runs_cost(t, drop, edge, node)
+        cost = local_search_window(new, edge, node, start, near, cluster_of, tol, awake, symmetric, half,
+                                   cost)
     else:
         cost = local_search(new, edge, node, start, near, cluster_of, tol, awake, symmetric)
     return new, cost
@@ -256,7 +261,9 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
     ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
     iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
     temperature, end temperature, largest removal, noise, reaction, re-opt window half-width (0:
-    full re-opt)), temperatures and noise in cost units. Iterations are scored, accepted (simulated
+    full re-opt)), temperatures and noise in cost units. On the windowed path the current cost is
+    counted by changes (:func:`iterate`) and a new trial best is priced from scratch. Iterations
+    are scored, accepted (simulated
     annealing) and rewarded as the module :mod:`gtsp_bench.solvers.heuristics.lns` describes;
     chunks of any size give the same run.
     """
@@ -274,7 +281,9 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
         cur_cost, best_cost = costs[0], costs[1]
         tol = REL_TOL * max(1.0, abs(cur_cost))
         new, new_cost = iterate(cur, k, r_op, i_op, level, edge, node, start, near, cluster_of, tol,
-                                symmetric, half)
+                                symmetric, half, cur_cost if half > 0 else np.nan)
+        if half > 0 and new_cost < costs[2] - tol:
+            new_cost = tour_cost(new, edge, node)  # counted by changes: a new trial best is priced
         counts[2] += 1
         counts[0] += 1
         if new_cost < best_cost - tol:

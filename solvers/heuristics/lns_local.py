@@ -61,18 +61,18 @@ def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) ->
 
 @njit(cache=True)
 def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
-            cluster_of: np.ndarray, tol: float, active: np.ndarray) -> bool:
+            cluster_of: np.ndarray, tol: float, active: np.ndarray) -> float:
     """2-opt with fixed heads over neighbour lists and don't-look bits, first improvement, in place.
 
     For each awake head ``a`` (``active[0]`` of its cluster) and each cluster ``c`` in
     ``near[cluster of a]``, the two exchanges that make ``a`` adjacent to ``c``'s head are tried; a
-    head where none improves goes to sleep, the ends of a changed edge wake. Returns whether
-    anything improved.
+    head where none improves goes to sleep, the ends of a changed edge wake. Returns the saving (0:
+    nothing improved).
     """
     n = len(t)
     if n < 5:
-        return False
-    any_gain = False
+        return 0.0
+    gained = 0.0
     improved = True
     while improved:
         improved = False
@@ -87,6 +87,7 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                 if c != b and d != a:  # a -> c ... b -> d: reverse i + 1 .. j
                     delta = ec(edge, a, c) + ec(edge, b, d) - ec(edge, a, b) - ec(edge, c, d)
                     if delta < -tol:
+                        gained -= delta
                         _reverse(t, pos, cluster_of, (i + 1) % n, j)
                         for x in (a, b, c, d):
                             _touch(active, cluster_of, t, pos[cluster_of[x]])
@@ -95,34 +96,47 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                 if c != p and e != a:  # p -> e ... a -> c: reverse i .. j - 1
                     delta = ec(edge, a, c) + ec(edge, p, e) - ec(edge, p, a) - ec(edge, e, c)
                     if delta < -tol:
+                        gained -= delta
                         _reverse(t, pos, cluster_of, i, (j - 1) % n)
                         for x in (a, p, c, e):
                             _touch(active, cluster_of, t, pos[cluster_of[x]])
                         improved = found = True
-            if found:
-                any_gain = True
-            else:
+            if not found:
                 active[0, cluster_of[t[i]]] = False
-    return any_gain
+    return gained
 
 
 @njit(cache=True)
 def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
              start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
-             active: np.ndarray, symmetric: bool = False) -> bool:
+             active: np.ndarray, symmetric: bool = False, awake_only: bool = False) -> float:
     """Each awake cluster (``active[1]``) in turn to its cheapest place and head (GLNS's
-    moveopt), in place.
+    moveopt), in place, in a random order of all the clusters (or, with ``awake_only``, of those
+    awake at the start: on a long cycle, shuffling all of them cost more than the moves).
 
     The places tried are its own and the edges on either side of the heads of its neighbour
     clusters ``near[c]``. A cluster that stays goes to sleep; one that moves wakes its old and new
-    neighbours. Returns whether anything improved. On ``symmetric`` costs ``ec(edge, v, y)`` is read
+    neighbours. Returns the saving (0: nothing improved). On ``symmetric`` costs ``ec(edge, v, y)`` is read
     as ``ec(edge, y, v)`` (the same number; a cluster's nodes are then one run of one row).
     """
     n = len(t)
     if n < 3:
-        return False
-    any_gain = False
-    for c in np.random.permutation(n):
+        return 0.0
+    gained = 0.0
+    if awake_only:
+        order = np.empty(n, dtype=np.int64)
+        m = 0
+        for c in range(n):
+            if active[1, c]:
+                order[m] = c
+                m += 1
+        for x in range(m - 1, 0, -1):
+            y = np.random.randint(0, x + 1)
+            order[x], order[y] = order[y], order[x]
+        order = order[:m]
+    else:
+        order = np.random.permutation(n)
+    for c in order:
         if not active[1, c]:
             continue
         i = pos[c]
@@ -149,7 +163,7 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
         if best_j == -1:
             active[1, c] = False
             continue
-        any_gain = True
+        gained += saving - best
         if best_j == -2:
             t[i] = best_v
             _touch(active, cluster_of, t, i)
@@ -169,23 +183,23 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
             t[best_j + 1] = best_v
             pos[c] = best_j + 1
         _touch(active, cluster_of, t, pos[c])  # the new neighbours
-    return any_gain
+    return gained
 
 
 @njit(cache=True)
 def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
-           cluster_of: np.ndarray, tol: float, active: np.ndarray, reverse: bool = False) -> bool:
+           cluster_of: np.ndarray, tol: float, active: np.ndarray, reverse: bool = False) -> float:
     """Or-opt with fixed heads, first improvement, in place: the run of 2 or 3 clusters starting
     at an awake cluster (``active[2]``) moves, in its direction (or, with ``reverse``, for
     symmetric costs, reversed if that is cheaper), to just after the head of a neighbour of its
     first cluster or just before the head of a neighbour of its last one. Each arc is priced in
     its direction, so this is exact on asymmetric costs too. A cluster whose runs do not move goes
-    to sleep; the ends of changed edges wake. Returns whether anything improved.
+    to sleep; the ends of changed edges wake. Returns the saving (0: nothing improved).
     """
     n = len(t)
     if n < 6:
-        return False
-    any_gain = False
+        return 0.0
+    gained = 0.0
     for i in range(n):
         c = cluster_of[t[i]]
         if not active[2, c]:
@@ -212,6 +226,7 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                             best, best_j, flip = d, j, True
             if best_j < 0:
                 continue
+            gained += gain - best
             x, y = t[best_j], t[(best_j + 1) % n]
             run = np.empty(length, dtype=np.int64)
             for r in range(length):
@@ -233,11 +248,9 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
                 _touch(active, cluster_of, t, pos[cluster_of[z]])
             found = True
             break
-        if found:
-            any_gain = True
-        else:
+        if not found:
             active[2, c] = False
-    return any_gain
+    return gained
 
 
 @njit(cache=True)
@@ -316,15 +329,18 @@ def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
 @njit(cache=True)
 def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                near: np.ndarray, cluster_of: np.ndarray, tol: float, active: np.ndarray,
-               symmetric: bool, reverse: bool = False) -> tuple[bool, float]:
-    """One round of 2-opt (symmetric costs only), or-opt (runs also reversed with ``reverse``
-    on symmetric costs) and move on ``t`` (in place): whether or-opt or move changed it, and its
-    cost after the round."""
-    if symmetric:
-        two_opt(t, pos, edge, near, cluster_of, tol, active)
-    moved = or_opt(t, pos, edge, near, cluster_of, tol, active, reverse and symmetric)
-    moved = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric) or moved
-    return moved, tour_cost(t, edge, node)
+               symmetric: bool, large: bool = False, cost: float = 0.0) -> tuple[bool, float]:
+    """One round of 2-opt (symmetric costs only), or-opt and move on ``t`` (in place): whether
+    or-opt or move changed it, and its cost after the round. ``large`` is the large-cycle path:
+    or-opt also reverses runs (on symmetric costs), move shuffles only the awake clusters, and the
+    cost after the round is ``cost`` (the cost before it) less the moves' savings, not a pass over
+    the tour."""
+    saved = two_opt(t, pos, edge, near, cluster_of, tol, active) if symmetric else 0.0
+    moved = or_opt(t, pos, edge, near, cluster_of, tol, active, large and symmetric)
+    shifted = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric, large)
+    if large:
+        return moved > 0.0 or shifted > 0.0, cost - (saved + moved + shifted)
+    return moved > 0.0 or shifted > 0.0, tour_cost(t, edge, node)
 
 
 @njit(cache=True)

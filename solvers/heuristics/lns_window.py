@@ -78,10 +78,10 @@ def reopt_window(t: np.ndarray, lo: int, length: int, edge: np.ndarray, node: np
 
 @njit(cache=True)
 def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
-                  cluster_of: np.ndarray, tol: float, active: np.ndarray, half: int) -> bool:
+                  cluster_of: np.ndarray, tol: float, active: np.ndarray, half: int) -> float:
     """Re-opt the windows of ``half`` positions either side of each cluster marked in
     ``active[3]`` (the marks are cleared; positions whose head changed wake), or the whole cycle
-    when the windows leave fewer than 2 positions out. Returns whether the tour got cheaper."""
+    when the windows leave fewer than 2 positions out. Returns the saving (0: none)."""
     n = len(t)
     cover = np.zeros(n, dtype=np.bool_)
     covered = 0
@@ -94,7 +94,7 @@ def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.n
                     covered += 1
     active[3, :] = False
     if covered == 0:
-        return False
+        return 0.0
     saved = t.copy()
     gain = 0.0
     if covered >= n - 1:
@@ -102,8 +102,9 @@ def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.n
         after = reopt(t, edge, node, start, cluster_of)
         if after >= before - tol:
             t[:] = saved
-            return False
+            return 0.0
         gain = before - after
+        cover[:] = True
     else:
         s = 0
         while cover[s]:  # an uncovered position: windows start after one
@@ -120,35 +121,58 @@ def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.n
             gain += reopt_window(t, i, length, edge, node, start, cluster_of, tol)
             x += length
     if gain <= 0.0:
-        return False
+        return 0.0
     for i in range(n):
-        if t[i] != saved[i]:
+        if cover[i] and t[i] != saved[i]:
             _touch(active, cluster_of, t, i)
-    return True
+    return gain
+
+
+@njit(cache=True)
+def runs_cost(t: np.ndarray, marked: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
+    """What the marked positions of the cycle ``t`` (not all of them) add to its cost: for each
+    maximal run of them, its nodes and the edges into, along and out of it, less the edge that
+    would join its two sides. Taking them out saves this; putting them in costs it."""
+    n = len(t)
+    total = 0.0
+    for i in range(n):
+        if not marked[i]:
+            continue
+        total += node[t[i]] + ec(edge, t[(i - 1) % n], t[i])
+        after = (i + 1) % n
+        if not marked[after]:  # the run ends here: its edge out, less the edge joining its sides
+            j = i
+            while marked[(j - 1) % n]:
+                j = (j - 1) % n
+            total += ec(edge, t[i], t[after]) - ec(edge, t[(j - 1) % n], t[after])
+    return total
 
 
 @njit(cache=True)
 def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                         near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
-                        symmetric: bool, half: int) -> float:
+                        symmetric: bool, half: int, cost: float = np.nan) -> float:
     """:func:`gtsp_bench.solvers.heuristics.lns_local.local_search` with the windowed re-opt
     (:func:`reopt_changed`, ``half`` positions either side of a changed cluster); in place,
-    returns the cost."""
+    returns the cost. Given the tour's ``cost``, it counts the cost from there by the moves'
+    savings (no pass over the tour; equal up to rounding); else it prices the tour at the start
+    and at the end."""
     pos, active = search_state(t, cluster_of, awake, 4)
-    cost = tour_cost(t, edge, node)
-    while True:
+    exact = np.isnan(cost)
+    if exact:
+        cost = tour_cost(t, edge, node)
+    while True:  # costs by the moves' savings
         moved, new_cost = move_round(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric,
-                                     True)
+                                     True, cost)
         if moved and new_cost < cost - tol:
             cost = new_cost
             continue
         cost = new_cost
-        if reopt_changed(t, edge, node, start, cluster_of, tol, active, half):
-            new_cost = tour_cost(t, edge, node)
-            if new_cost < cost - tol:
-                cost = new_cost
-                continue
-        return tour_cost(t, edge, node)
+        gain = reopt_changed(t, edge, node, start, cluster_of, tol, active, half)
+        if gain > tol:
+            cost -= gain
+            continue
+        return tour_cost(t, edge, node) if exact else cost
 
 
 @njit(cache=True)
