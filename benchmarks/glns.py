@@ -31,7 +31,7 @@ from gtsp_bench.registry import get_solver, run_solver
 
 GLNS_CSV = gtsplib.folder() / "glns-45.csv"
 COLUMNS = ("instance", "seed", "budget_s", "objective", "best_known", "gap_pct", "runtime_s",
-           "status", "iterations", "trials")
+           "status", "iterations", "trials", "best_at")
 
 
 def glns_rows() -> dict[str, dict[str, str]]:
@@ -68,7 +68,8 @@ def solve(task: tuple[str, int, float, dict]) -> dict[str, object]:
     return {"instance": name, "seed": seed, "budget_s": round(budget, 3), "objective": r.objective,
             "best_known": best, "gap_pct": 100.0 * (r.objective - best) / best,
             "runtime_s": round(r.runtime_s, 3), "status": r.status,
-            "iterations": r.stats.get("iterations"), "trials": r.stats.get("trials")}
+            "iterations": r.stats.get("iterations"), "trials": r.stats.get("trials"),
+            "best_at": r.stats.get("best_at")}
 
 
 def write_csv(rows: list[dict[str, object]], path: Path) -> None:
