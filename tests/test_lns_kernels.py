@@ -59,6 +59,19 @@ def test_neighbours_are_nearest_first():
         assert max(d) <= min(others)
 
 
+def test_nearest_first_is_the_start_of_a_stable_argsort():
+    """The partial sort behind the quadrant lists gives the first entries of a full stable sort,
+    ties (common with rounded distances) in index order, an infinite entry included."""
+    rng = np.random.default_rng(5)
+    for size, at_least in ((30, 5), (200, 12), (7, 7), (7, 10)):
+        row = rng.integers(0, 6, size).astype(np.float64)
+        row[size // 2] = np.inf
+        got = kernels._nearest_first(row, at_least)
+        full = np.argsort(row, kind="mergesort")
+        assert len(got) >= min(at_least, size)
+        assert np.array_equal(got, full[:len(got)])
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_quadrant_neighbours_hold_the_nearest_of_each_quadrant(seed):
     """Each list excludes its cluster, has no repeat, is sorted by cluster distance, and holds

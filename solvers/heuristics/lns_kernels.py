@@ -348,6 +348,17 @@ def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
+def _nearest_first(row: np.ndarray, at_least: int) -> np.ndarray:
+    """The start of ``np.argsort(row, kind="mergesort")`` (ascending, ties by index), at least
+    ``at_least`` long, without sorting the whole row."""
+    if at_least >= len(row):
+        return np.argsort(row, kind="mergesort")
+    bound = np.partition(row, at_least)[at_least]
+    part = np.flatnonzero(row <= bound)  # every entry up to the bound, ties included, by index
+    return part[np.argsort(row[part], kind="mergesort")]
+
+
+@njit(cache=True)
 def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadrant: int) -> np.ndarray:
     """The rows of :func:`neighbours` with centres (``dist`` with an infinite diagonal)."""
     k = len(dist)
@@ -374,13 +385,14 @@ def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadran
                     taken[best[q, x]] = True
                     near[c, got] = best[q, x]
                     got += 1
-        order = np.argsort(dist[c], kind="mergesort")
-        x = 0
-        while got < count:  # the rest: the nearest not taken yet
-            if not taken[order[x]] and order[x] != c:
-                near[c, got] = order[x]
-                got += 1
-            x += 1
+        if got < count:  # the rest: the nearest not taken yet (ties by index)
+            order = _nearest_first(dist[c], count + got)
+            x = 0
+            while got < count:
+                if not taken[order[x]] and order[x] != c:
+                    near[c, got] = order[x]
+                    got += 1
+                x += 1
         row = near[c].copy()
         key = np.empty(count)
         for x in range(count):
