@@ -132,11 +132,11 @@ def test_runs_cost_is_what_the_runs_add(directed):
     """Taking the marked positions out of a cycle saves exactly ``runs_cost``: runs of one, of
     several, and one that wraps past the end, on symmetric and directed costs."""
     if directed:
-        edge, node, start, cluster_of = _asymmetric_problem(12, 4)
+        edge, node, start, _ = _asymmetric_problem(12, 4)
         rng = np.random.default_rng(4)
         t = np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(12)], dtype=np.int64)
     else:
-        p, start, cluster_of = _problem(12, 3, 4)
+        p, _, _ = _problem(12, 3, 4)
         edge, node = p.edge_cost, p.node_cost
         t = _random_tour(p, np.random.default_rng(4))
     n = len(t)
