@@ -233,6 +233,7 @@ class HighsBackend:
         self.h.setOptionValue("output_flag", options.verbose)
         self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
         self.stalls = 0  # runs stopped by the iteration limit and restarted
+        self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""
@@ -303,6 +304,13 @@ class HighsBackend:
             if status == stopped:
                 self.h.clearSolver()
                 status = self._run(2**31 - 1)
+        done = (self._hs.HighsModelStatus.kOptimal, self._hs.HighsModelStatus.kInfeasible,
+                self._hs.HighsModelStatus.kObjectiveBound, self._hs.HighsModelStatus.kTimeLimit)
+        if status not in done and iterations is None:  # (seen once at K = 50): again from no basis
+            self.retries += 1
+            self.h.clearSolver()
+            self.h.setBasis()
+            status = self._run(2**31 - 1)
         if status == self._hs.HighsModelStatus.kInfeasible:
             return LpResult("infeasible")
         if status == self._hs.HighsModelStatus.kObjectiveBound:
