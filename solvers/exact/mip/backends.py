@@ -109,6 +109,15 @@ class Backend(Protocol):
         """Change column bounds."""
         ...
 
+    def basis(self) -> Any:
+        """The current basis (opaque), for :meth:`set_basis`."""
+        ...
+
+    def set_basis(self, basis: Any) -> None:
+        """Start the next solve from ``basis`` (taken since by :meth:`basis` with the same rows
+        and columns)."""
+        ...
+
     def solve_lp(self, time_limit: float, cutoff: float = math.inf,
                  iterations: int | None = None) -> LpResult:
         """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``, and
@@ -266,6 +275,14 @@ class HighsBackend:
         self.h.changeColsBounds(len(cols), np.asarray(cols, dtype=np.int32),
                                 np.asarray(lower, float), np.asarray(upper, float))
 
+    def basis(self) -> Any:
+        """The current ``HighsBasis``."""
+        return self.h.getBasis()
+
+    def set_basis(self, basis: Any) -> None:
+        """Start the next solve from ``basis``."""
+        self.h.setBasis(basis)
+
     def _set_time_limit(self, seconds: float) -> None:
         # HiGHS compares time_limit with the object's run time summed over all its runs
         self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
@@ -389,6 +406,13 @@ class GurobiBackend:
         vs = [self.vars[c] for c in cols]
         self.m.setAttr("LB", vs, [float(v) for v in lower])
         self.m.setAttr("UB", vs, [float(v) for v in upper])
+
+    def basis(self) -> Any:
+        """Nothing: Gurobi starts from its last basis itself (and solves the MILP itself)."""
+        return None
+
+    def set_basis(self, basis: Any) -> None:
+        """Nothing (see :meth:`basis`)."""
 
     def _optimize(self, callback: Callable[..., None] | None = None) -> None:
         try:

@@ -160,10 +160,10 @@ class _Search:
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
         self.pseudo = PseudoCosts(model.n_cols)
-        #: the branching that made the node being explored: (model column, up, its value in the
-        #: parent's LP, the parent's LP value), recorded in the pseudo-costs at its first LP
+        # the node's branching (model column, up, its value and the LP value in the parent), for
+        # the pseudo-costs at its first LP; the LP value of the column last chosen to branch on
         self.branched: tuple[int, bool, float, float] | None = None
-        self.branch_value = 0.0  # the LP value of the column last chosen for branching
+        self.branch_value = 0.0
 
     # -------------------------------------------------------------- helpers
     def left(self) -> float:
@@ -339,8 +339,7 @@ class _Search:
                     key, frac = int(lp.cols[col]), self.branch_value
                     heapq.heappush(heap, _Node(bound, seq, children[1], (key, second == 1, frac, bound)))
                     node = _Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
-                    # dive, unless far above the best
-                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):
+                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
                         heapq.heappush(heap, node)
                         node = None
             else:
@@ -423,12 +422,14 @@ class _Search:
 
     def _strong(self, col: int, objective: float, absent: np.ndarray) -> StrongResult:
         """Both children's LPs of backend column ``col`` (at most :data:`STRONG_ITERATIONS`
-        simplex iterations each), the column's bounds restored after."""
+        simplex iterations each), each from the node's basis (restored after, with the bounds)."""
         backend = self.lp.backend
         child, empty = [], []
+        start = backend.basis()
         for v in (0.0, 1.0):
             backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
             res = self.solve_lp(iterations=STRONG_ITERATIONS)
+            backend.set_basis(start)
             empty.append(self._child_is_empty(res, absent))
             if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
                 self.stats["strong_partial"] = self.stats.get("strong_partial", 0) + 1
