@@ -110,15 +110,23 @@ def test_score_floors_each_gain():
     assert score(0.0, 3.0, 1e6) == pytest.approx(3.0)  # floor 1e-6 x 1e6 = 1
 
 
-@pytest.mark.parametrize("reliable", [1, 2**40])
+@pytest.mark.parametrize("share", [0.0, 2.0])
 @pytest.mark.parametrize("seed", range(3))
-def test_branch_and_cut_with_either_branching_proves_the_dp_optimum(reliable, seed, monkeypatch):
+def test_branch_and_cut_with_either_branching_proves_the_dp_optimum(share, seed, monkeypatch):
     """A K = 8 instance left to the branch and cut (two root rounds, greedy tour): with
-    reliability branching and with plain strong branching (no column ever reliable) the dp
-    optimum is proven."""
-    monkeypatch.setattr(branching, "RELIABLE", reliable)
+    reliability branching (from the 16th strong-branching LP on, whatever their iterations) and
+    with strong branching only, the dp optimum is proven."""
+    monkeypatch.setattr(branching, "PARTIAL_SHARE", share)
     inst = generate_instance(8, 6, seed=seed + 5)
     r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(root_rounds=2, lns_trials=0))
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
     assert r.stats["bc_nodes"] >= 1
+
+
+def test_reliability_needs_two_nodes_of_mostly_stopped_strong_lps():
+    assert not branching.reliability(0, 0)
+    assert not branching.reliability(2 * branching.CANDIDATES - 1, 2 * branching.CANDIDATES - 1)
+    assert branching.reliability(2 * branching.CANDIDATES, branching.CANDIDATES)
+    assert not branching.reliability(100, 49)
+    assert branching.reliability(100, 50)

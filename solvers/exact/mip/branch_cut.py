@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from gtsp_bench.solvers.exact.mip import flow
+from gtsp_bench.solvers.exact.mip import branching, flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
@@ -160,8 +160,7 @@ class _Search:
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
         self.pseudo = PseudoCosts(model.n_cols)
-        # the node's branching (model column, up, its value and the LP value in the parent), for
-        # the pseudo-costs at its first LP; the LP value of the column last chosen to branch on
+        # node's branching (model column, up, its and the LP's value in the parent); last one's value
         self.branched: tuple[int, bool, float, float] | None = None
         self.branch_value = 0.0
 
@@ -422,14 +421,14 @@ class _Search:
 
     def _strong(self, col: int, objective: float, absent: np.ndarray) -> StrongResult:
         """Both children's LPs of backend column ``col`` (at most :data:`STRONG_ITERATIONS`
-        simplex iterations each), each from the node's basis (restored after, with the bounds)."""
+        simplex iterations each); the node's basis is restored after a run stopped there."""
         backend = self.lp.backend
-        child, empty = [], []
-        start = backend.basis()
+        child, empty, start = [], [], backend.basis()
         for v in (0.0, 1.0):
             backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
             res = self.solve_lp(iterations=STRONG_ITERATIONS)
-            backend.set_basis(start)
+            if res.status == "stopped":
+                backend.set_basis(start)
             empty.append(self._child_is_empty(res, absent))
             if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
                 self.stats["strong_partial"] = self.stats.get("strong_partial", 0) + 1
@@ -446,9 +445,9 @@ class _Search:
         other child is empty (then the column is fixed to that value, no branching); ``None``
         when both children are empty (the node is pruned).
 
-        Candidates: the fractional ``y`` (else ``x``), chosen by reliability branching
-        (:func:`~gtsp_bench.solvers.exact.mip.branching.choose`): strong branching on those with
-        few pseudo-cost observations, the product of the two children's gains.
+        Candidates: the fractional ``y`` (else ``x``) closest to 1/2, scored by the product of
+        the two children's gains (:func:`~gtsp_bench.solvers.exact.mip.branching.choose`): all
+        strong-branched while strong-branching LPs mostly finish, else reliability branching.
         """
         is_y = self.lp.cols < self.model.n_nodes
         frac = np.abs(values - np.round(values)) > 1e-6
@@ -458,17 +457,18 @@ class _Search:
                 break
         else:
             raise AssertionError("no fractional column to branch on")
+        cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
         if len(cand) == 1:
             return int(cand[0]), float(round(values[cand[0]])), False
         absent = self.absent()
+        cheap = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
         choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
-                        lambda col: self._strong(col, objective, absent), stop=lambda: self.left() <= 0)
-        if choice is None:
-            self.stats["strong_pruned"] = self.stats.get("strong_pruned", 0) + 1
-            return None
-        if choice.only:
-            self.stats["strong_fixed"] = self.stats.get("strong_fixed", 0) + 1
-        return choice.col, choice.value, choice.only
+                        lambda col: self._strong(col, objective, absent), stop=lambda: self.left() <= 0,
+                        reliable=2**62 if cheap else None, lookahead=len(cand) if cheap else None)
+        if choice is None or choice.only:
+            key = "strong_pruned" if choice is None else "strong_fixed"
+            self.stats[key] = self.stats.get(key, 0) + 1
+        return None if choice is None else (choice.col, choice.value, choice.only)
 
 
 def solve_exact(
