@@ -36,9 +36,9 @@ of the GTSP):
 4. unless the root proved the upper bound optimal, LNS restarts with other seeds (a small share
    of the time limit) and, after a better tour, the root loop again; then branch and cut with
    the backend as LP solver: best first with bounded dives, the same cuts, pricing and
-   reduced-cost fixing at every node, reliability branching on ``y`` first (strong branching
-   until a column has pseudo-costs; a child shown empty fixes the column at the node
-   instead). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
+   reduced-cost fixing at every node, strong branching on ``y`` first (reliability branching
+   once the strong-branching LPs mostly stop at their cap; a child shown empty fixes the column
+   at the node instead). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
    every column not fixed, adding subtour rows from a callback.
 
 Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20

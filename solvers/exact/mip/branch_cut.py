@@ -419,15 +419,16 @@ class _Search:
         rc = self.lp.reduced_costs(res.duals, absent)
         return res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap
 
-    def _strong(self, col: int, objective: float, absent: np.ndarray) -> StrongResult:
+    def _strong(self, col: int, objective: float, absent: np.ndarray, restore: bool) -> StrongResult:
         """Both children's LPs of backend column ``col`` (at most :data:`STRONG_ITERATIONS`
-        simplex iterations each); the node's basis is restored after a run stopped there."""
+        simplex iterations each); the node's basis is restored after a run stopped there (after
+        every run with ``restore``)."""
         backend = self.lp.backend
         child, empty, start = [], [], backend.basis()
         for v in (0.0, 1.0):
             backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
             res = self.solve_lp(iterations=STRONG_ITERATIONS)
-            if res.status == "stopped":
+            if restore or res.status == "stopped":
                 backend.set_basis(start)
             empty.append(self._child_is_empty(res, absent))
             if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
@@ -457,13 +458,14 @@ class _Search:
                 break
         else:
             raise AssertionError("no fractional column to branch on")
-        cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
+        cheap = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
+        if cheap:  # (reliability branching takes every candidate)
+            cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
         if len(cand) == 1:
             return int(cand[0]), float(round(values[cand[0]])), False
         absent = self.absent()
-        cheap = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
         choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
-                        lambda col: self._strong(col, objective, absent), stop=lambda: self.left() <= 0,
+                        lambda c: self._strong(c, objective, absent, not cheap), stop=lambda: self.left() < 0,
                         reliable=2**62 if cheap else None, lookahead=len(cand) if cheap else None)
         if choice is None or choice.only:
             key = "strong_pruned" if choice is None else "strong_fixed"
