@@ -421,8 +421,7 @@ class _Search:
 
     def _strong(self, col: int, objective: float, absent: np.ndarray, restore: bool) -> StrongResult:
         """Both children's LPs of backend column ``col`` (at most :data:`STRONG_ITERATIONS`
-        simplex iterations each); the node's basis is restored after a run stopped there (after
-        every run with ``restore``)."""
+        iterations each); the node's basis restored after a stopped run (any run: ``restore``)."""
         backend = self.lp.backend
         child, empty, start = [], [], backend.basis()
         for v in (0.0, 1.0):
