@@ -134,3 +134,29 @@ def test_a_stalled_run_restarts_and_reaches_the_same_optimum(monkeypatch):
         stalled.add_cuts(cuts)
     assert stalled.backend.stalls > 0
     assert plain.backend.stalls == 0
+
+
+def test_a_run_ending_otherwise_is_solved_again_from_no_basis():
+    """A HiGHS run that ends neither solved, infeasible, cut off nor out of time (seen once in
+    a K = 50 branch and cut) is run again from no basis: the optimum, and the retry counted; an
+    iteration-limited (strong-branching) run is not retried."""
+    plain, _ = _lp(HighsBackend, seed=4)
+    odd, _ = _lp(HighsBackend, seed=4)
+    expected = plain.backend.solve_lp(60.0)
+    backend = odd.backend
+    run, calls = backend._run, []
+
+    def first_unknown(limit: int):
+        status = run(limit)
+        calls.append(limit)
+        return backend._hs.HighsModelStatus.kUnknown if len(calls) == 1 else status
+
+    backend._run = first_unknown
+    res = backend.solve_lp(60.0)
+    assert res.status == expected.status == "optimal"
+    np.testing.assert_allclose(res.objective, expected.objective, rtol=1e-9)
+    assert backend.retries == 1 and len(calls) == 2
+    calls.clear()
+    backend.h.clearSolver()
+    assert backend.solve_lp(60.0, iterations=10**6).status == "stopped"
+    assert backend.retries == 1 and len(calls) == 1

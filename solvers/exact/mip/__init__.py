@@ -36,9 +36,10 @@ of the GTSP):
 4. unless the root proved the upper bound optimal, LNS restarts with other seeds (a small share
    of the time limit) and, after a better tour, the root loop again; then branch and cut with
    the backend as LP solver: best first with bounded dives, the same cuts, pricing and
-   reduced-cost fixing at every node, strong branching on ``y`` first (a child shown empty fixes
-   the column at the node instead). A backend with lazy constraints (Gurobi) solves the MILP itself
-   instead, over every column not fixed, adding subtour rows from a callback.
+   reduced-cost fixing at every node, strong branching on ``y`` first (reliability branching
+   once the strong-branching LPs mostly stop at their cap; a child shown empty fixes the column
+   at the node instead). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
+   every column not fixed, adding subtour rows from a callback.
 
 Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20
 instance whose root gap stayed open, HiGHS spent 110 s on 3 nodes without finishing (it can
@@ -59,6 +60,8 @@ Modules, each importing only the ones above it:
 * :mod:`~gtsp_bench.solvers.exact.mip.backends`: LP/MIP results, the ``Backend`` and
   ``LazyMipBackend`` protocols, :class:`LpModel` (the model held in a backend) and the HiGHS and
   Gurobi backends (highspy and gurobipy are imported when a backend is built, never on import);
+* :mod:`~gtsp_bench.solvers.exact.mip.branching`: pseudo-costs and reliability branching
+  (:class:`PseudoCosts`, :func:`choose`), independent of the backend;
 * :mod:`~gtsp_bench.solvers.exact.mip.branch_cut`: the search (root loop, own branch and cut,
   the backend's lazy MILP), :func:`solve_exact` and :class:`MipSolver`, the base of the ``milp``
   and ``gurobi`` solvers (:mod:`gtsp_bench.solvers.exact.milp`,

@@ -109,6 +109,15 @@ class Backend(Protocol):
         """Change column bounds."""
         ...
 
+    def basis(self) -> Any:
+        """The current basis (opaque), for :meth:`set_basis`."""
+        ...
+
+    def set_basis(self, basis: Any) -> None:
+        """Start the next solve from ``basis`` (taken since by :meth:`basis` with the same rows
+        and columns)."""
+        ...
+
     def solve_lp(self, time_limit: float, cutoff: float = math.inf,
                  iterations: int | None = None) -> LpResult:
         """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``, and
@@ -233,6 +242,7 @@ class HighsBackend:
         self.h.setOptionValue("output_flag", options.verbose)
         self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
         self.stalls = 0  # runs stopped by the iteration limit and restarted
+        self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""
@@ -264,6 +274,14 @@ class HighsBackend:
         """Change column bounds."""
         self.h.changeColsBounds(len(cols), np.asarray(cols, dtype=np.int32),
                                 np.asarray(lower, float), np.asarray(upper, float))
+
+    def basis(self) -> Any:
+        """The current ``HighsBasis``."""
+        return self.h.getBasis()
+
+    def set_basis(self, basis: Any) -> None:
+        """Start the next solve from ``basis``."""
+        self.h.setBasis(basis)
 
     def _set_time_limit(self, seconds: float) -> None:
         # HiGHS compares time_limit with the object's run time summed over all its runs
@@ -303,6 +321,13 @@ class HighsBackend:
             if status == stopped:
                 self.h.clearSolver()
                 status = self._run(2**31 - 1)
+        done = (self._hs.HighsModelStatus.kOptimal, self._hs.HighsModelStatus.kInfeasible,
+                self._hs.HighsModelStatus.kObjectiveBound, self._hs.HighsModelStatus.kTimeLimit)
+        if status not in done and iterations is None:  # (seen once at K = 50): again from no basis
+            self.retries += 1
+            self.h.clearSolver()
+            self.h.setBasis()
+            status = self._run(2**31 - 1)
         if status == self._hs.HighsModelStatus.kInfeasible:
             return LpResult("infeasible")
         if status == self._hs.HighsModelStatus.kObjectiveBound:
@@ -381,6 +406,13 @@ class GurobiBackend:
         vs = [self.vars[c] for c in cols]
         self.m.setAttr("LB", vs, [float(v) for v in lower])
         self.m.setAttr("UB", vs, [float(v) for v in upper])
+
+    def basis(self) -> Any:
+        """Nothing: Gurobi starts from its last basis itself (and solves the MILP itself)."""
+        return None
+
+    def set_basis(self, basis: Any) -> None:
+        """Nothing (see :meth:`basis`)."""
 
     def _optimize(self, callback: Callable[..., None] | None = None) -> None:
         try:

@@ -19,8 +19,9 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from gtsp_bench.solvers.exact.mip import flow
+from gtsp_bench.solvers.exact.mip import branching, flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
+from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
@@ -38,8 +39,6 @@ from gtsp_bench.registry import Solution
 PRICE_PER_NODE = 2
 #: Largest share of the time limit that pruning may take.
 PRUNE_SHARE = 0.2
-#: Candidates whose children's LPs are solved before branching (strong branching).
-STRONG_CANDIDATES = 8
 #: Most dual simplex iterations of a strong-branching LP: one stopped there scores its child by the
 #: objective reached (a guide, never a bound). At UAV K = 50 a full strong LP took 3,000-6,000
 #: iterations (2-4 s), 16 of them a node.
@@ -51,7 +50,7 @@ DIVE_SHARE = 0.3
 RESTART_SHARE = 0.05
 #: Share of the time limit after which an unfinished first root loop pauses for the restarts
 #: (then goes on): at K = 100 it would otherwise run to the limit with the first tour.
-ROOT_SHARE = 0.5
+ROOT_SHARE = 0.05
 
 
 # ---------------------------------------------------------------------- the method
@@ -125,6 +124,7 @@ class _Node:
     bound: float
     seq: int
     fixes: np.ndarray = field(compare=False)
+    branched: tuple[int, bool, float, float] | None = field(default=None, compare=False)
 
 
 class _Search:
@@ -159,6 +159,10 @@ class _Search:
         self.margin = 1e-9 * max(1.0, abs(self.ub))  # against rounding in the LP's duals
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
+        self.pseudo = PseudoCosts(model.n_cols)
+        # node's branching (model column, up, its and the LP's value in the parent); last one's value
+        self.branched: tuple[int, bool, float, float] | None = None
+        self.branch_value = 0.0
 
     # -------------------------------------------------------------- helpers
     def left(self) -> float:
@@ -308,6 +312,7 @@ class _Search:
                                           np.where(code < 0, upper0, code).astype(float))
                 applied = fixes
                 explored += 1
+                self.branched = node.branched
                 outcome = self._node_loop()
                 if outcome == "stopped":
                     heapq.heappush(heap, node)
@@ -330,9 +335,10 @@ class _Search:
                         children.append(child)
                     seq += 2
                     best_other = heap[0].bound if heap else bound
-                    heapq.heappush(heap, _Node(bound, seq, children[1]))
-                    node = _Node(bound, seq - 1, children[0])  # dive, unless far above the best
-                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):
+                    key, frac = int(lp.cols[col]), self.branch_value
+                    heapq.heappush(heap, _Node(bound, seq, children[1], (key, second == 1, frac, bound)))
+                    node = _Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
+                    if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
                         heapq.heappush(heap, node)
                         node = None
             else:
@@ -360,6 +366,10 @@ class _Search:
                 return None
             if res.values is None or res.reduced_costs is None or res.duals is None:
                 return "stopped"
+            if self.branched is not None:  # the node's first LP: the branching's gain
+                key, up, frac, parent = self.branched
+                self.pseudo.record(key, up, min(res.objective, self.ub) - parent, frac)
+                self.branched = None
             values = lp.full(res.values)
             if len(absent):
                 rc = lp.reduced_costs(res.duals, absent)
@@ -389,6 +399,7 @@ class _Search:
                 if choice is None:
                     return None
                 col, value, only = choice
+                self.branch_value = float(res.values[col])
                 if only:  # the other child is empty: fix the column here and go on
                     return col, value
                 return res.objective, col, value, fix
@@ -408,15 +419,35 @@ class _Search:
         rc = self.lp.reduced_costs(res.duals, absent)
         return res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap
 
+    def _strong(self, col: int, objective: float, absent: np.ndarray, restore: bool) -> StrongResult:
+        """Both children's LPs of backend column ``col`` (at most :data:`STRONG_ITERATIONS`
+        iterations each); the node's basis restored after a stopped run (any run: ``restore``)."""
+        backend = self.lp.backend
+        child, empty, start = [], [], backend.basis()
+        for v in (0.0, 1.0):
+            backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
+            res = self.solve_lp(iterations=STRONG_ITERATIONS)
+            if restore or res.status == "stopped":
+                backend.set_basis(start)
+            empty.append(self._child_is_empty(res, absent))
+            if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
+                self.stats["strong_partial"] = self.stats.get("strong_partial", 0) + 1
+                child.append(max(objective, res.objective))
+            else:
+                child.append(math.inf if res.status == "infeasible" else
+                             res.objective if res.status == "optimal" else objective)
+        backend.set_bounds(np.array([col]), np.zeros(1), np.ones(1))
+        self.stats["strong_lps"] = self.stats.get("strong_lps", 0) + 2
+        return StrongResult((child[0], child[1]), (empty[0], empty[1]))
+
     def _branching(self, values: np.ndarray, objective: float) -> tuple[int, float, bool] | None:
         """Backend column to branch on, the value of the child to dive into, and whether the
         other child is empty (then the column is fixed to that value, no branching); ``None``
         when both children are empty (the node is pruned).
 
-        Candidates: the fractional ``y`` closest to 1/2 (else such ``x``), at most
-        :data:`STRONG_CANDIDATES`; with more than one, each child's LP is solved (strong
-        branching, over the columns in the LP) and the column whose children raise the bound
-        most (product of the two gains) is taken; the dive goes to the child of lower LP value.
+        Candidates: the fractional ``y`` (else ``x``) closest to 1/2, scored by the product of
+        the two children's gains (:func:`~gtsp_bench.solvers.exact.mip.branching.choose`): all
+        strong-branched while strong-branching LPs mostly finish, else reliability branching.
         """
         is_y = self.lp.cols < self.model.n_nodes
         frac = np.abs(values - np.round(values)) > 1e-6
@@ -426,39 +457,19 @@ class _Search:
                 break
         else:
             raise AssertionError("no fractional column to branch on")
-        cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:STRONG_CANDIDATES]]
+        cheap = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
+        if cheap:  # (reliability branching takes every candidate)
+            cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
         if len(cand) == 1:
             return int(cand[0]), float(round(values[cand[0]])), False
-        backend, best = self.lp.backend, -1.0
-        pick = int(cand[0]), float(round(values[cand[0]])), False
         absent = self.absent()
-        for col in cand:
-            child, empty = [], []
-            for v in (0.0, 1.0):
-                backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
-                res = self.solve_lp(iterations=STRONG_ITERATIONS)
-                empty.append(self._child_is_empty(res, absent))
-                if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
-                    self.stats["strong_partial"] = self.stats.get("strong_partial", 0) + 1
-                    child.append(max(objective, res.objective))
-                else:
-                    child.append(math.inf if res.status == "infeasible" else
-                                 res.objective if res.status == "optimal" else objective)
-            backend.set_bounds(np.array([col]), np.zeros(1), np.ones(1))
-            self.stats["strong_lps"] = self.stats.get("strong_lps", 0) + 2
-            if empty[0] and empty[1]:
-                self.stats["strong_pruned"] = self.stats.get("strong_pruned", 0) + 1
-                return None
-            if empty[0] or empty[1]:
-                self.stats["strong_fixed"] = self.stats.get("strong_fixed", 0) + 1
-                return int(col), 1.0 if empty[0] else 0.0, True
-            gains = [max(min(c, self.ub) - objective, 1e-6 * max(1.0, abs(objective))) for c in child]
-            score = gains[0] * gains[1]
-            if score > best:
-                best, pick = score, (int(col), 0.0 if child[0] <= child[1] else 1.0, False)
-            if self.left() <= 0:
-                break
-        return pick
+        choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
+                        lambda c: self._strong(c, objective, absent, not cheap), stop=lambda: self.left() < 0,
+                        reliable=2**62 if cheap else None, lookahead=len(cand) if cheap else None)
+        if choice is None or choice.only:
+            key = "strong_pruned" if choice is None else "strong_fixed"
+            self.stats[key] = self.stats.get(key, 0) + 1
+        return None if choice is None else (choice.col, choice.value, choice.only)
 
 
 def solve_exact(
@@ -541,6 +552,7 @@ def solve_exact(
             search.branch_and_cut()
     stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
     stats["lp_stalls"] = getattr(search.lp.backend, "stalls", 0)
+    stats["lp_retries"] = getattr(search.lp.backend, "retries", 0)
     lower = search.lb
     if search.model.integral_costs and math.isfinite(lower):
         lower = math.ceil(lower - 1e-7)  # every tour costs an integer
