@@ -119,7 +119,8 @@ def _padded(fixes: np.ndarray, n: int) -> np.ndarray:
 @dataclass(order=True)
 class _Node:
     """An open branch-and-cut node: its parent's bound and, per backend column, -1 (free) or
-    the value it is fixed to."""
+    the value it is fixed to; ``branched``: the branching that made it (model column, up, the
+    column's LP value and the LP bound in the parent), for the pseudo-costs."""
 
     bound: float
     seq: int
@@ -160,9 +161,6 @@ class _Search:
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
         self.pseudo = PseudoCosts(model.n_cols)
-        # node's branching (model column, up, its and the LP's value in the parent); last one's value
-        self.branched: tuple[int, bool, float, float] | None = None
-        self.branch_value = 0.0
 
     # -------------------------------------------------------------- helpers
     def left(self) -> float:
@@ -312,8 +310,7 @@ class _Search:
                                           np.where(code < 0, upper0, code).astype(float))
                 applied = fixes
                 explored += 1
-                self.branched = node.branched
-                outcome = self._node_loop()
+                outcome = self._node_loop(node.branched)
                 if outcome == "stopped":
                     heapq.heappush(heap, node)
                     break
@@ -323,8 +320,8 @@ class _Search:
                     node = _Node(node.bound, node.seq, fixes)
                     continue
                 node = None
-                if isinstance(outcome, tuple) and len(outcome) == 4:
-                    bound, col, value, fix = outcome
+                if isinstance(outcome, tuple) and len(outcome) == 5:
+                    bound, col, value, frac, fix = outcome
                     base = _padded(applied, len(lp.cols))
                     base[fix] = 0
                     first, second = (1, 0) if value >= 0.5 else (0, 1)  # dive into ``value``
@@ -335,7 +332,7 @@ class _Search:
                         children.append(child)
                     seq += 2
                     best_other = heap[0].bound if heap else bound
-                    key, frac = int(lp.cols[col]), self.branch_value
+                    key = int(lp.cols[col])
                     heapq.heappush(heap, _Node(bound, seq, children[1], (key, second == 1, frac, bound)))
                     node = _Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
                     if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
@@ -351,11 +348,13 @@ class _Search:
             self.lb = max(self.lb, min(best_open, self.ub - self.gap))
         self.stats["bc_nodes"] = explored
 
-    def _node_loop(self) -> tuple[float, int, float, np.ndarray] | tuple[int, float] | str | None:
+    def _node_loop(self, branched: tuple[int, bool, float, float] | None = None
+                   ) -> tuple[float, int, float, float, np.ndarray] | tuple[int, float] | str | None:
         """Cut loop at a node: ``None`` when pruned, ``"stopped"`` at the time limit,
         (backend column, value) when strong branching showed that the node's solutions below the
-        incumbent all have the column at that value, else (bound, backend column and its value
-        to branch on, backend columns fixed by reduced cost in the subtree)."""
+        incumbent all have the column at that value, else (bound, backend column, the child's value
+        to dive into, the column's LP value, backend columns fixed by reduced cost in the subtree).
+        ``branched`` (:attr:`_Node.branched`) is recorded in the pseudo-costs at the first LP."""
         lp = self.lp
         history: list[float] = []
         while self.left() > 0:
@@ -366,10 +365,10 @@ class _Search:
                 return None
             if res.values is None or res.reduced_costs is None or res.duals is None:
                 return "stopped"
-            if self.branched is not None:  # the node's first LP: the branching's gain
-                key, up, frac, parent = self.branched
+            if branched is not None:  # the node's first LP: the branching's gain
+                key, up, frac, parent = branched
                 self.pseudo.record(key, up, min(res.objective, self.ub) - parent, frac)
-                self.branched = None
+                branched = None
             values = lp.full(res.values)
             if len(absent):
                 rc = lp.reduced_costs(res.duals, absent)
@@ -399,10 +398,9 @@ class _Search:
                 if choice is None:
                     return None
                 col, value, only = choice
-                self.branch_value = float(res.values[col])
                 if only:  # the other child is empty: fix the column here and go on
                     return col, value
-                return res.objective, col, value, fix
+                return res.objective, col, value, float(res.values[col]), fix
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
@@ -457,15 +455,15 @@ class _Search:
                 break
         else:
             raise AssertionError("no fractional column to branch on")
-        cheap = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
-        if cheap:  # (reliability branching takes every candidate)
+        full = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
+        if full:  # full strong branching of the closest few (reliability branching takes them all)
             cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
         if len(cand) == 1:
             return int(cand[0]), float(round(values[cand[0]])), False
         absent = self.absent()
         choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
-                        lambda c: self._strong(c, objective, absent, not cheap), stop=lambda: self.left() < 0,
-                        reliable=2**62 if cheap else None, lookahead=len(cand) if cheap else None)
+                        lambda c: self._strong(c, objective, absent, not full), stop=lambda: self.left() < 0,
+                        reliable=2**62 if full else None, lookahead=len(cand) if full else None)
         if choice is None or choice.only:
             key = "strong_pruned" if choice is None else "strong_fixed"
             self.stats[key] = self.stats.get(key, 0) + 1
