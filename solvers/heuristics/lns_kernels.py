@@ -98,6 +98,16 @@ def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarra
 
 
 @njit(cache=True)
+def _price_beside(c: int, sl: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray, edge: np.ndarray,
+                  node: np.ndarray, start: np.ndarray, noise: float, best: float, best_s: int,
+                  best_v: int, symmetric: bool) -> tuple[float, int, int]:
+    """:func:`_price_edge` on the two edges beside slot ``sl`` (the one into it first)."""
+    best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start, noise, best, best_s, best_v,
+                                       symmetric)
+    return _price_edge(c, sl, at, nxt, edge, node, start, noise, best, best_s, best_v, symmetric)
+
+
+@njit(cache=True)
 def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
                 slot_of: np.ndarray, near: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 start: np.ndarray, noise: float, symmetric: bool) -> tuple[float, int, int]:
@@ -111,10 +121,8 @@ def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.n
         for w in range(m):
             sl = slot_of[near[c, w]]
             if sl >= 0:
-                best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start, noise,
-                                                   best, best_s, best_v, symmetric)
-                best, best_s, best_v = _price_edge(c, sl, at, nxt, edge, node, start, noise,
-                                                   best, best_s, best_v, symmetric)
+                best, best_s, best_v = _price_beside(c, sl, at, nxt, prv, edge, node, start, noise,
+                                                     best, best_s, best_v, symmetric)
         if best_s >= 0:
             return best, best_s, best_v
         if n_slots > WIDE_INSERT:
@@ -122,10 +130,8 @@ def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.n
                 for x in range(m):
                     sl = slot_of[near[near[c, w], x]]
                     if sl >= 0:
-                        best, best_s, best_v = _price_edge(c, prv[sl], at, nxt, edge, node, start,
-                                                           noise, best, best_s, best_v, symmetric)
-                        best, best_s, best_v = _price_edge(c, sl, at, nxt, edge, node, start, noise,
-                                                           best, best_s, best_v, symmetric)
+                        best, best_s, best_v = _price_beside(c, sl, at, nxt, prv, edge, node, start,
+                                                             noise, best, best_s, best_v, symmetric)
             if best_s >= 0:
                 return best, best_s, best_v
     for e in range(n_slots):
