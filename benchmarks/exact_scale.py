@@ -17,11 +17,17 @@ The gap is ``(objective - bound) / objective``; a proven optimum has gap 0. ``ti
 solve's wall time, ``cpu s`` the process's CPU time over it (on a shared machine the two differ).
 For GTSPLIB the best known value is shown and ``match`` says whether the objective equals it
 (``BETTER`` below it).
+
+The CSV is rewritten after every solve and doubles as the run's progress: a run with the same
+solver, time limit and solver seed keeps the rows already there (``kept`` after the line) and
+solves only the missing ones, so a long sweep (``--gtsplib large --time-limit 3600``: up to
+20 hours) can be stopped and resumed; ``--redo`` solves everything again.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import statistics
 import sys
 import time
@@ -29,6 +35,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from gtsp_bench import gtsplib
+from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.tables import Row, solve, write_csv
@@ -36,7 +43,10 @@ from gtsp_bench.tables import Row, solve, write_csv
 #: Node counts of the two GTSPLIB groups (symmetric instances only).
 SMALL_NODES, LARGE_NODES = 442, 1084
 COLUMNS = ("group", "instance", "clusters", "nodes", "omega", "status", "objective", "lower_bound",
-           "gap_percent", "runtime_s", "cpu_s", "best_known", "match")
+           "gap_percent", "runtime_s", "cpu_s", "best_known", "match", "solver", "time_limit_s",
+           "solver_seed")
+#: A solve's identity in the CSV: group, instance name, omega ("" for GTSPLIB).
+Key = tuple[str, str, str]
 
 
 @dataclass(frozen=True)
@@ -123,6 +133,56 @@ def summary(done: Sequence[tuple[Job, Row]]) -> list[str]:
     return out
 
 
+def _key(job: Job) -> Key:
+    return job.group, job.name, "" if job.omega is None else repr(job.omega)
+
+
+def record(job: Job, row: Row, cpu: float, args: argparse.Namespace) -> list[object]:
+    """The CSV line of one solve (with the settings a resumed run must share)."""
+    return [job.group, job.name, job.instance.n_clusters, job.instance.n_nodes,
+            "" if job.omega is None else job.omega, row.status, repr(row.objective),
+            repr(row.lower_bound), f"{gap_percent(row):.4f}", f"{row.runtime_s:.2f}", f"{cpu:.2f}",
+            "" if job.best is None else job.best, match(row, job.best), args.solver,
+            repr(float(args.time_limit)), args.solver_seed]
+
+
+def _settings(args: argparse.Namespace) -> tuple[str, float, int]:
+    return args.solver, float(args.time_limit), args.solver_seed
+
+
+def read_table(path: str) -> list[dict[str, str]]:
+    """The lines of a CSV this benchmark wrote (none when the file is missing)."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            lines = list(csv.DictReader(f))
+    except FileNotFoundError:
+        return []
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: cannot read the table: {exc}") from None
+    for i, r in enumerate(lines, start=2):
+        try:
+            _line_key(r), _line_settings(r), _line_row(r)
+        except (KeyError, TypeError, ValueError):
+            raise InputError(f"{path}: line {i} is not a row of this benchmark's table "
+                             f"(columns {', '.join(COLUMNS)})") from None
+    return lines
+
+
+def _line_key(r: dict[str, str]) -> Key:
+    return r["group"], r["instance"], "" if r["omega"] == "" else repr(float(r["omega"]))
+
+
+def _line_settings(r: dict[str, str]) -> tuple[str, float, int]:
+    return r["solver"], float(r["time_limit_s"]), int(r["solver_seed"])
+
+
+def _line_row(r: dict[str, str]) -> tuple[Row, float]:
+    omega = None if r["omega"] == "" else float(r["omega"])
+    row = Row(r["group"], r["instance"], omega, r["solver"], r["status"], float(r["objective"]),
+              float(r["lower_bound"]), float(r["runtime_s"]))
+    return row, float(r["cpu_s"])
+
+
 def _floats(text: str) -> list[float]:
     return [float(t) for t in text.split(",") if t.strip()]
 
@@ -132,7 +192,8 @@ def _ints(text: str) -> list[int]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the benchmark; exit code 1 when a proof disagrees with a proven GTSPLIB optimum."""
+    """Run the benchmark; exit code 1 when a proof disagrees with a proven GTSPLIB optimum, 2 on
+    bad input (one line on stderr)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--solver", default="milp")
     p.add_argument("--gtsplib", default="small", help="small, large, all, none or NAME,NAME,...")
@@ -141,9 +202,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--omegas", type=_floats, default=[0.0, 0.5, 0.9])
     p.add_argument("--time-limit", type=float, default=120.0)
     p.add_argument("--solver-seed", type=int, default=0)
-    p.add_argument("--csv", default=None, help="write the rows here")
+    p.add_argument("--csv", default=None,
+                   help="write the rows here, after every solve; rows already there for the same "
+                        "solver, time limit and solver seed are kept, not solved again")
+    p.add_argument("--redo", action="store_true", help="solve again the rows the CSV already has")
     args = p.parse_args(argv)
+    try:
+        return _run(args)
+    except InputError as exc:
+        print(f"exact_scale: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _run(args: argparse.Namespace) -> int:
     refs = gtsplib.best_known()
+    lines = read_table(args.csv) if args.csv else []
+    mine = [r for r in lines if _line_settings(r) == _settings(args)]
+    kept = {} if args.redo else {_line_key(r): _line_row(r) for r in mine}
     print(f"{args.solver}, time limit {args.time_limit:g} s per solve", flush=True)
     print(HEADER + "\n" + "-" * len(HEADER), flush=True)
     done: list[tuple[Job, Row]] = []
@@ -151,24 +226,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     bad = 0
     start = time.perf_counter()
     for job in jobs(args):
-        cpu = time.process_time()
-        row = solve(job.group, job.instance, job.omega, args.solver, args.time_limit, args.solver_seed)
-        cpus.append(time.process_time() - cpu)
+        found = kept.get(_key(job))
+        if found is None:
+            cpu = time.process_time()
+            row = solve(job.group, job.instance, job.omega, args.solver, args.time_limit, args.solver_seed)
+            cpu_s = time.process_time() - cpu
+        else:
+            row, cpu_s = found
+        cpus.append(cpu_s)
         done.append((job, row))
-        print(line(job, row, cpus[-1]), flush=True)
+        print(line(job, row, cpu_s) + ("  kept" if found else ""), flush=True)
         ref = refs.get(job.name) if job.group == "GTSPLIB" else None
         proven = ref is not None and ref.status == "optimal" and row.status == "optimal"
         if proven and row.objective != ref.value:
             print(f"  DISAGREES with the proven optimum {ref.value:g}", flush=True)
             bad += 1
+        if args.csv:
+            ours = {_key(j) for j, _ in done}
+            others = [[r[c] for c in COLUMNS] for r in lines
+                      if not (_line_settings(r) == _settings(args) and _line_key(r) in ours)]
+            write_csv(args.csv, COLUMNS, [record(j, r, c, args) for (j, r), c in zip(done, cpus, strict=True)]
+                      + others)
     print(*summary(done), sep="\n")
     print(f"{bad} disagreement(s) with proven optima; {time.perf_counter() - start:.0f} s in all")
-    if args.csv:
-        write_csv(args.csv, COLUMNS, (
-            [j.group, j.name, j.instance.n_clusters, j.instance.n_nodes,
-             "" if j.omega is None else j.omega, r.status, repr(r.objective), repr(r.lower_bound),
-             f"{gap_percent(r):.4f}", f"{r.runtime_s:.2f}", f"{c:.2f}", "" if j.best is None else j.best,
-             match(r, j.best)] for (j, r), c in zip(done, cpus, strict=True)))
     return 1 if bad else 0
 
 

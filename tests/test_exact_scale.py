@@ -40,3 +40,49 @@ def test_gtsplib_groups():
     assert len(small) == 63 and len(large) == 20
     assert not set(small) & set(large)
     assert script.gtsplib_names("none") == [] and script.gtsplib_names("a, b") == ["a", "b"]
+
+
+def test_an_interrupted_run_resumes_from_its_csv(tmp_path, capsys, monkeypatch):
+    """A second run with the same settings solves only what the CSV lacks (the kept line is
+    marked); a run with another time limit solves again and keeps the first run's rows in the file;
+    ``--redo`` solves everything again."""
+    script = _script()
+    out = tmp_path / "rows.csv"
+    calls = []
+    real = script.solve
+
+    def counting(group, inst, omega, *rest):
+        calls.append((inst.name, omega))
+        return real(group, inst, omega, *rest)
+
+    monkeypatch.setattr(script, "solve", counting)
+    base = ["--gtsplib", "none", "--uav", "4", "--seeds", "1", "--time-limit", "30", "--csv", str(out)]
+    assert script.main(base + ["--omegas", "0"]) == 0
+    first = list(csv.DictReader(out.open()))
+    assert calls == [("uav-K4-N20-s1", 0.0)]
+    capsys.readouterr()
+    assert script.main(base + ["--omegas", "0,0.9"]) == 0
+    text = capsys.readouterr().out
+    assert calls == [("uav-K4-N20-s1", 0.0), ("uav-K4-N20-s1", 0.9)]
+    assert text.count("  kept") == 1 and "UAV K=4: 2/2 proven" in text
+    rows = list(csv.DictReader(out.open()))
+    assert rows[0] == first[0] and [r["omega"] for r in rows] == ["0.0", "0.9"]
+    assert script.main(["--gtsplib", "none", "--uav", "4", "--seeds", "1", "--omegas", "0",
+                        "--time-limit", "20", "--csv", str(out)]) == 0
+    assert len(calls) == 3
+    rows = list(csv.DictReader(out.open()))
+    assert sorted(float(r["time_limit_s"]) for r in rows) == [20.0, 30.0, 30.0]
+    assert script.main(base + ["--omegas", "0", "--redo"]) == 0
+    assert len(calls) == 4 and len(list(csv.DictReader(out.open()))) == 3
+
+
+def test_a_csv_of_something_else_is_refused_in_one_line(tmp_path, capsys):
+    """A CSV that is not this benchmark's table: exit 2, one line naming the file, untouched."""
+    script = _script()
+    bad = tmp_path / "other.csv"
+    bad.write_text("a,b\n1,2\n")
+    assert script.main(["--gtsplib", "none", "--uav", "4", "--seeds", "1", "--omegas", "0",
+                        "--csv", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"exact_scale: error: {bad}: line 2 ")
+    assert bad.read_text() == "a,b\n1,2\n"
