@@ -172,14 +172,14 @@ class LpModel:
     def add_cols(self, cols: np.ndarray) -> None:
         """Add model columns ``cols`` with their coefficients in the base rows and cuts."""
         base, _ = self.model.base_rows(cols)
-        cut_part = sp.csc_array(self.cuts.matrix(self.model, cols))
+        cut_part = self.cuts.sparse(self.model, cols)
         self.backend.add_cols(self.model.cost[cols], sp.vstack([base, cut_part], format="csc"))
         self.cols = np.concatenate([self.cols, cols])
 
     def add_cuts(self, cuts: Cuts) -> None:
         """Add cut rows over the columns present (each side in its sparser form over them)."""
         cuts = cuts.sparsest(self.model, self.cols)
-        matrix = sp.csr_array(cuts.matrix(self.model, self.cols))
+        matrix = sp.csr_array(cuts.sparse(self.model, self.cols))
         self.backend.add_rows(matrix, np.full(len(cuts), -np.inf), cuts.rhs)
         self.cuts = Cuts.stack([self.cuts, cuts])
         self.slack_age = np.concatenate([self.slack_age, np.zeros(len(cuts), dtype=np.int64)])

@@ -268,7 +268,7 @@ class _Search:
             cuts = subtour_cuts(model, lp.full(v))
             if cuts is None:
                 return None
-            return sp.csr_array(cuts.matrix(model, lp.cols)), cuts.rhs
+            return sp.csr_array(cuts.sparse(model, lp.cols)), cuts.rhs
 
         backend = lp.backend
         assert isinstance(backend, LazyMipBackend)
