@@ -3,6 +3,9 @@ neighbour lists, and the compiled code giving the same answers as the same code 
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
@@ -161,3 +164,23 @@ def test_cluster_distances_are_least_arcs():
     for c in range(7):
         for d in range(7):
             assert dist[c, d] == edge[start[c]:start[c + 1], start[d]:start[d + 1]].min()
+
+
+_MISSES = """
+from numba.core.registry import CPUDispatcher
+from gtsp_bench.solvers.heuristics import lns_costs, lns_kernels, lns_local, lns_window
+lns_kernels.warm_up()
+print(sorted(f"{m.__name__}.{n}" for m in (lns_costs, lns_kernels, lns_local, lns_window)
+             for n, v in vars(m).items()
+             if isinstance(v, CPUDispatcher) and sum(v.stats.cache_misses.values())))
+"""
+
+
+def test_a_second_process_loads_every_kernel_from_the_cache():
+    """After one process's warm-up has compiled (or loaded) the kernels, another process's
+    warm-up compiles none of them: every signature it uses is found in numba's cache (a default
+    ``nan`` argument once made ``iterate`` miss, and compile, in every process)."""
+    run = [sys.executable, "-c", _MISSES]
+    subprocess.run(run, check=True, capture_output=True, text=True, timeout=600)
+    second = subprocess.run(run, check=True, capture_output=True, text=True, timeout=600)
+    assert second.stdout.strip().splitlines()[-1] == "[]"

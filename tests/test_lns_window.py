@@ -100,7 +100,7 @@ def test_windowed_local_search_never_worse_and_feasible(seed, directed):
     awake = np.zeros(k, dtype=bool)
     awake[[1, 5]] = True
     cost = lns_window.local_search_window(t, edge, node, start, near, cluster_of, 1e-9, awake,
-                                          not directed, 2)
+                                          not directed, 2, np.nan)
     assert len(set(cluster_of[t].tolist())) == k
     assert cost == pytest.approx(lns_local.tour_cost(t, edge, node), rel=1e-12)
     assert cost <= before + 1e-9
@@ -118,7 +118,7 @@ def test_iterate_with_a_window_gives_tours():
     for removal in range(len(kernels.REMOVALS)):
         for insertion in range(len(kernels.INSERTIONS)):
             new, cost = kernels.iterate(t, 5, removal, insertion, 0.2, p.edge_cost, p.node_cost, start,
-                                        near, cluster_of, 1e-9, True, 2)
+                                        near, cluster_of, 1e-9, True, 2, np.nan)
             assert _feasible(p, new)
             assert cost == pytest.approx(p.tour_cost(new), rel=1e-12)
             new, cost = kernels.iterate(t, 5, removal, insertion, 0.2, p.edge_cost, p.node_cost, start,

@@ -210,13 +210,14 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
 @njit(cache=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
-            tol: float, symmetric: bool, half: int, cost: float = np.nan) -> tuple[np.ndarray, float]:
+            tol: float, symmetric: bool, half: int, cost: float) -> tuple[np.ndarray, float]:
     """One LNS iteration on a copy of ``t``: remove ``k`` clusters, insert them, local search
     (waking the inserted clusters). With ``half`` > 0, the large-cycle path of
     :mod:`gtsp_bench.solvers.heuristics.lns_window`: its removals (when ``8 k`` is below the
-    cycle's length) and its windowed re-opt, and given ``t``'s ``cost``, the new cost counted from
-    it by what each step changed (equal up to rounding) instead of pricing the whole tour; else
-    the full re-opt."""
+    cycle's length) and its windowed re-opt, and given ``t``'s ``cost`` (not ``nan``), the new cost
+    counted from it by what each step changed (equal up to rounding) instead of pricing the whole
+    tour; else the full re-opt. (``cost`` has no default: numba's cache keys a default ``nan`` by
+    a value unequal to itself, so such a kernel was compiled again in every process.)"""
     if half > 0 and 8 * k < len(t):
         drop = remove_near(t, k, removal, edge, node, near, cluster_of)
     else:
@@ -453,7 +454,7 @@ def warm_up() -> None:
         for how in range(len(REMOVALS)):
             for half in (0, 1):
                 iterate(t, 2, how, how % len(INSERTIONS), 0.1, costs, node, start, near, cluster_of, 1e-9,
-                        True, half)
+                        True, half, np.nan)
         for how in range(len(REMOVALS)):
             remove_near(t, 1, how, costs, node, near, cluster_of)
         cur = t.copy()

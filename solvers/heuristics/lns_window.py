@@ -151,10 +151,10 @@ def runs_cost(t: np.ndarray, marked: np.ndarray, edge: np.ndarray, node: np.ndar
 @njit(cache=True)
 def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                         near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
-                        symmetric: bool, half: int, cost: float = np.nan) -> float:
+                        symmetric: bool, half: int, cost: float) -> float:
     """:func:`gtsp_bench.solvers.heuristics.lns_local.local_search` with the windowed re-opt
     (:func:`reopt_changed`, ``half`` positions either side of a changed cluster); in place,
-    returns the cost. Given the tour's ``cost``, it counts the cost from there by the moves'
+    returns the cost. Given the tour's ``cost`` (not ``nan``), it counts the cost from there by the moves'
     savings (no pass over the tour; equal up to rounding); else it prices the tour at the start
     and at the end."""
     pos, active = search_state(t, cluster_of, awake, 4)
