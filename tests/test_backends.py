@@ -163,3 +163,56 @@ def test_a_run_ending_otherwise_is_solved_again_from_no_basis():
     backend.h.clearSolver()
     assert backend.solve_lp(60.0, iterations=10**6).status == "stopped"
     assert backend.retries == 1 and len(calls) == 1
+
+
+def test_a_stored_basis_comes_back_by_column_and_cut():
+    """A basis stored by model column and cut key comes back as it was on the same LP (its
+    re-solve takes no iteration); after cuts were purged and added and columns added, each kept
+    column and cut gets its stored status, new cuts are basic and new columns at their lower
+    bound, and HiGHS completes the rest to the same optimum as a new backend."""
+    from gtsp_bench.solvers.exact.mip.backends import BASIC, LOWER
+
+    lp, _ = _lp(HighsBackend, seed=3)
+    model = lp.model
+    lp.add_cuts(separate(model, lp.full(lp.backend.solve_lp(60.0).values)))
+    res = lp.backend.solve_lp(60.0)
+    stored = lp.stored_basis()
+    cols0, rows0 = lp.backend.statuses()
+    keys0 = np.concatenate([np.arange(model.n_base_rows), lp.cut_keys])
+    assert np.all(cols0[np.isin(lp.cols, stored.cols, invert=True)] == LOWER)
+    assert np.all(rows0[np.isin(keys0, stored.rows, invert=True)] == BASIC)
+    # move away (a basic column at 1 fixed to 0, solved), undo the bound, restore: the same basis
+    basic = np.flatnonzero((cols0 == BASIC) & (res.values > 0.5))[:1]
+    lp.backend.set_bounds(basic, np.zeros(1), np.zeros(1))
+    assert lp.backend.solve_lp(60.0).status in ("optimal", "infeasible")
+    assert not np.array_equal(lp.backend.statuses()[0], cols0)
+    lp.backend.set_bounds(basic, np.zeros(1), np.ones(1))
+    lp.restore_basis(stored)
+    cols1, rows1 = lp.backend.statuses()
+    np.testing.assert_array_equal(cols1, cols0)
+    np.testing.assert_array_equal(rows1, rows0)
+    again = lp.backend.solve_lp(60.0)
+    assert lp.backend.h.getInfo().simplex_iteration_count == 0
+    np.testing.assert_allclose(again.objective, res.objective, rtol=1e-9)
+    # cuts purged and added, columns added: the statuses passed on, by key
+    cuts = separate(model, lp.full(again.values))
+    lp.purge(lp.full(again.values), 1)
+    assert len(lp.cut_keys) < len(keys0) - model.n_base_rows
+    lp.add_cuts(cuts)
+    new_cols = np.setdiff1d(np.arange(model.n_cols), lp.cols)[:5]
+    lp.add_cols(new_cols)
+    given = {}
+    lp.backend.set_statuses = lambda c, r: given.update(cols=c.copy(), rows=r.copy())
+    lp.restore_basis(stored)
+    was_col = dict(zip(stored.cols.tolist(), stored.col_status.tolist(), strict=True))
+    was_row = dict(zip(stored.rows.tolist(), stored.row_status.tolist(), strict=True))
+    keys = np.concatenate([np.arange(model.n_base_rows), lp.cut_keys])
+    assert given["cols"].tolist() == [was_col.get(c, LOWER) for c in lp.cols.tolist()]
+    assert given["rows"].tolist() == [was_row.get(k, BASIC) for k in keys.tolist()]
+    assert np.isin(keys, keys0, invert=True).sum() > 0  # (there are new cuts)
+    del lp.backend.set_statuses
+    lp.restore_basis(stored)
+    fresh = LpModel(model, HighsBackend(MipOptions()), lp.cols)
+    fresh.add_cuts(lp.cuts)
+    np.testing.assert_allclose(lp.backend.solve_lp(60.0).objective, fresh.backend.solve_lp(60.0).objective,
+                               rtol=1e-9)

@@ -85,3 +85,28 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-9)
     assert r.stats["root_rounds"] >= 1
+
+
+@pytest.mark.parametrize("dive", [True, False])
+def test_a_node_taken_from_the_open_ones_starts_from_its_parents_basis(dive, monkeypatch):
+    """A K = 16 instance left to the branch and cut (two root rounds, greedy tour): each node
+    taken from the open ones (every node but the first when nothing dives) starts from its
+    parent's stored basis, a dived-into child does not, and the proof is the one of the search
+    without stored bases."""
+    from gtsp_bench.solvers.exact.mip import branch_cut
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend, LpModel
+
+    from gtsp_bench.generator import generate_instance
+
+    if not dive:
+        monkeypatch.setattr(branch_cut, "DIVE_SHARE", -1.0)
+    problem = price(generate_instance(16, 6, seed=8), 0.5)
+    options = MipOptions(root_rounds=2, lns_trials=0)
+    r = solve_exact(problem, HighsBackend, options)
+    assert r.status == "optimal" and r.stats["bc_nodes"] >= 3
+    restores = r.stats["basis_restores"]
+    assert restores == r.stats["bc_nodes"] - 1 if not dive else 1 <= restores < r.stats["bc_nodes"] - 1
+    monkeypatch.setattr(LpModel, "restore_basis", lambda self, basis: None)
+    plain = solve_exact(problem, HighsBackend, options)
+    assert plain.status == "optimal"
+    assert r.objective == pytest.approx(plain.objective, rel=1e-12)

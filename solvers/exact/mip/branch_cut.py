@@ -14,17 +14,17 @@ import heapq
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from gtsp_bench.solvers.exact.mip import branching, flow
-from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
+from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult, StoredBasis
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
+from gtsp_bench.solvers.exact.mip.tree import Node, padded
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
 from gtsp_bench.solvers.heads import optimal_heads
@@ -109,25 +109,6 @@ class _Timer:
         self.stats[self.key] = self.stats.get(self.key, 0.0) + time.perf_counter() - self.start
 
 
-def _padded(fixes: np.ndarray, n: int) -> np.ndarray:
-    """Node column codes for ``n`` columns: columns added since the node was made are free."""
-    if len(fixes) == n:
-        return fixes
-    return np.concatenate([fixes, np.full(n - len(fixes), -1, dtype=np.int8)])
-
-
-@dataclass(order=True)
-class _Node:
-    """An open branch-and-cut node: its parent's bound and, per backend column, -1 (free) or
-    the value it is fixed to; ``branched``: the branching that made it (model column, up, the
-    column's LP value and the LP bound in the parent), for the pseudo-costs."""
-
-    bound: float
-    seq: int
-    fixes: np.ndarray = field(compare=False)
-    branched: tuple[int, bool, float, float] | None = field(default=None, compare=False)
-
-
 class _Search:
     """State of one exact solve: the incumbent, the bound, the LP and the phases.
 
@@ -161,6 +142,7 @@ class _Search:
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
         self.pseudo = PseudoCosts(model.n_cols)
+        self.node_basis: StoredBasis | None = None  # the last node's basis before branching
 
     # -------------------------------------------------------------- helpers
     def left(self) -> float:
@@ -290,24 +272,30 @@ class _Search:
         reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
         fixes columns by reduced cost for its subtree and branches by :meth:`_branching` (strong
         branching among the fractional ``y`` closest to 1/2, else such ``x``). Cuts are
-        global; slack ones are purged.
+        global; slack ones are purged. A node taken from the open ones (a jump in the tree)
+        starts from its parent's last basis (:attr:`~gtsp_bench.solvers.exact.mip.tree.Node.basis`):
+        from the previous node's, far away in the tree, HiGHS's dual simplex often stalled.
         """
         lp = self.lp
-        heap: list[_Node] = []
+        heap: list[Node] = []
         free = np.full(len(lp.cols), -1, dtype=np.int8)
-        node: _Node | None = _Node(self.lb, 0, free)
+        node: Node | None = Node(self.lb, 0, free)
         applied = free
         seq = explored = 0
+        popped = False  # whether ``node`` came from the heap (a jump), not a dive or the same node
         while node is not None and not self.proven and self.left() > 0:
             if node.bound <= self.ub - self.gap:
                 # move the LP's bounds here (columns priced in later are free in older nodes)
-                fixes, applied = _padded(node.fixes, len(lp.cols)), _padded(applied, len(lp.cols))
+                fixes, applied = padded(node.fixes, len(lp.cols)), padded(applied, len(lp.cols))
                 change = np.flatnonzero(fixes != applied)
                 if len(change):
                     code = fixes[change]
                     upper0 = np.where(self.fixed[lp.cols[change]], 0.0, 1.0)
                     lp.backend.set_bounds(change, np.maximum(code, 0).astype(float),
                                           np.where(code < 0, upper0, code).astype(float))
+                if popped and node.basis is not None:  # from its parent's basis, not the last node's
+                    lp.restore_basis(node.basis)
+                    self.stats["basis_restores"] = self.stats.get("basis_restores", 0) + 1
                 applied = fixes
                 explored += 1
                 outcome = self._node_loop(node.branched)
@@ -315,14 +303,14 @@ class _Search:
                     heapq.heappush(heap, node)
                     break
                 if isinstance(outcome, tuple) and len(outcome) == 2:  # the same node, one more fix
-                    fixes = _padded(applied, len(lp.cols)).copy()
+                    fixes = padded(applied, len(lp.cols)).copy()
                     fixes[outcome[0]] = int(outcome[1])
-                    node = _Node(node.bound, node.seq, fixes)
+                    node = Node(node.bound, node.seq, fixes)
                     continue
                 node = None
                 if isinstance(outcome, tuple) and len(outcome) == 5:
                     bound, col, value, frac, fix = outcome
-                    base = _padded(applied, len(lp.cols))
+                    base = padded(applied, len(lp.cols))
                     base[fix] = 0
                     first, second = (1, 0) if value >= 0.5 else (0, 1)  # dive into ``value``
                     children = []
@@ -333,14 +321,16 @@ class _Search:
                     seq += 2
                     best_other = heap[0].bound if heap else bound
                     key = int(lp.cols[col])
-                    heapq.heappush(heap, _Node(bound, seq, children[1], (key, second == 1, frac, bound)))
-                    node = _Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
+                    heapq.heappush(heap, Node(bound, seq, children[1], (key, second == 1, frac, bound),
+                                              self.node_basis))
+                    node = Node(bound, seq - 1, children[0], (key, first == 1, frac, bound), self.node_basis)
                     if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
                         heapq.heappush(heap, node)
                         node = None
             else:
                 node = None
-            if node is None and heap:
+            popped = node is None and bool(heap)
+            if popped:
                 node = heapq.heappop(heap)
             # the global bound: the best open node (the incumbent's when none is open)
             best_open = min(heap[0].bound if heap else math.inf,
@@ -354,7 +344,7 @@ class _Search:
         (backend column, value) when strong branching showed that the node's solutions below the
         incumbent all have the column at that value, else (bound, backend column, the child's value
         to dive into, the column's LP value, backend columns fixed by reduced cost in the subtree).
-        ``branched`` (:attr:`_Node.branched`) is recorded in the pseudo-costs at the first LP."""
+        ``branched`` (:attr:`Node.branched`) is recorded in the pseudo-costs at the first LP."""
         lp = self.lp
         history: list[float] = []
         while self.left() > 0:
@@ -394,6 +384,7 @@ class _Search:
                 rc = res.reduced_costs
                 fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
                                      & (res.values < TOL))
+                self.node_basis = lp.stored_basis()  # (strong branching moves it) for the children
                 choice = self._branching(res.values, res.objective)
                 if choice is None:
                     return None
