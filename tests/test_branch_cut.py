@@ -89,10 +89,10 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
 
 @pytest.mark.parametrize("dive", [True, False])
 def test_a_node_taken_from_the_open_ones_starts_from_its_parents_basis(dive, monkeypatch):
-    """A K = 16 instance left to the branch and cut (two root rounds, greedy tour): each node
-    taken from the open ones (every node but the first when nothing dives) starts from its
-    parent's stored basis, a dived-into child does not, and the proof is the one of the search
-    without stored bases."""
+    """A K = 16 instance left to the branch and cut (two root rounds, greedy tour), every jump
+    counted as one: each node taken from the open ones (every node but the first when nothing
+    dives) starts from its parent's stored basis, a dived-into child does not; with no jump large
+    enough, no basis is restored; the proof is the one of the search without stored bases."""
     from gtsp_bench.solvers.exact.mip import branch_cut
     from gtsp_bench.solvers.exact.mip.backends import HighsBackend, LpModel
 
@@ -100,12 +100,18 @@ def test_a_node_taken_from_the_open_ones_starts_from_its_parents_basis(dive, mon
 
     if not dive:
         monkeypatch.setattr(branch_cut, "DIVE_SHARE", -1.0)
+    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 0)
     problem = price(generate_instance(16, 6, seed=8), 0.5)
     options = MipOptions(root_rounds=2, lns_trials=0)
     r = solve_exact(problem, HighsBackend, options)
     assert r.status == "optimal" and r.stats["bc_nodes"] >= 3
     restores = r.stats["basis_restores"]
     assert restores == r.stats["bc_nodes"] - 1 if not dive else 1 <= restores < r.stats["bc_nodes"] - 1
+    if dive:
+        return
+    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 10**9)
+    assert "basis_restores" not in solve_exact(problem, HighsBackend, options).stats
+    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 0)
     monkeypatch.setattr(LpModel, "restore_basis", lambda self, basis: None)
     plain = solve_exact(problem, HighsBackend, options)
     assert plain.status == "optimal"

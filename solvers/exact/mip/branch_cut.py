@@ -46,6 +46,9 @@ STRONG_ITERATIONS = 1000
 #: A dive stops at a node whose bound is above the best open one by more than this share of the
 #: gap between that one and the incumbent (then the best open node is taken).
 DIVE_SHARE = 0.3
+#: A node taken from the open ones whose column bounds differ from the LP's in more than this many
+#: columns starts from its parent's basis.
+JUMP_BOUNDS = 20
 #: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
 RESTART_SHARE = 0.05
 #: Share of the time limit after which an unfinished first root loop pauses for the restarts
@@ -293,7 +296,7 @@ class _Search:
                     upper0 = np.where(self.fixed[lp.cols[change]], 0.0, 1.0)
                     lp.backend.set_bounds(change, np.maximum(code, 0).astype(float),
                                           np.where(code < 0, upper0, code).astype(float))
-                if popped and node.basis is not None:  # from its parent's basis, not the last node's
+                if popped and node.basis is not None and len(change) > JUMP_BOUNDS:  # parent's basis
                     lp.restore_basis(node.basis)
                     self.stats["basis_restores"] = self.stats.get("basis_restores", 0) + 1
                 applied = fixes
