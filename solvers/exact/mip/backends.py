@@ -28,9 +28,6 @@ from gtsp_bench.errors import InputError
 STALL_ITERATIONS = 5_000
 #: ... or this many per row and column, if more.
 STALL_PER_LINE = 0.5
-#: Status codes of :meth:`Backend.statuses` (HiGHS's): nonbasic at the lower bound, basic, nonbasic
-#: at the upper bound.
-LOWER, BASIC, UPPER = 0, 1, 2
 #: gurobipy's error code for a model above the size-limited licence.
 _SIZE_LIMIT_ERROR = 10010
 
@@ -122,16 +119,9 @@ class Backend(Protocol):
         and columns)."""
         ...
 
-    def statuses(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The current basis as status codes per column and per row (:data:`LOWER`,
-        :data:`BASIC`, :data:`UPPER`, other codes: other nonbasic), or ``None`` when there is
-        none (or the backend keeps its own)."""
-        ...
-
-    def set_statuses(self, cols: np.ndarray, rows: np.ndarray) -> None:
-        """Start the next solve from these status codes (as :meth:`statuses` gives them, for
-        the current columns and rows); they need not form a basis (too many or too few basic
-        entries, a singular one): the backend completes them."""
+    def start_cold(self) -> None:
+        """Solve the next LP that has no iteration limit from no basis (HiGHS: by the interior
+        point method), not from the last one: after a jump in the tree it is far away."""
         ...
 
     def solve_lp(self, time_limit: float, cutoff: float = math.inf,
@@ -159,33 +149,11 @@ class LazyMipBackend(Backend, Protocol):
 
 
 # ---------------------------------------------------------------------- the model in a backend
-@dataclass(frozen=True)
-class StoredBasis:
-    """A basis kept by model column and row key (:attr:`LpModel.cut_keys`), to start a later LP
-    from after columns and cuts came and went; only the entries off their default status
-    (columns :data:`LOWER`, rows :data:`BASIC`).
-
-    Attributes
-    ----------
-    cols, col_status
-        Model columns and their status codes.
-    rows, row_status
-        Row keys (base row index, or a cut's key) and their status codes.
-    """
-
-    cols: np.ndarray
-    col_status: np.ndarray
-    rows: np.ndarray
-    row_status: np.ndarray
-
-
 class LpModel:
     """The GTSP model held in a backend: which model columns it has, and the cuts in it.
 
     Rows are the model's base rows, then the cuts in the order added (purging deletes some);
-    backend column ``k`` is model column ``cols[k]``. Each cut has a key, ``cut_keys`` (increasing
-    in the order added, from ``model.n_base_rows`` on: base row ``i`` has key ``i``), by which a
-    :class:`StoredBasis` finds its rows again.
+    backend column ``k`` is model column ``cols[k]``.
 
     Parameters
     ----------
@@ -202,8 +170,6 @@ class LpModel:
         self.cols = np.zeros(0, dtype=np.int64)
         self.cuts = Cuts.empty(model.n_nodes)
         self.slack_age = np.zeros(0, dtype=np.int64)
-        self.cut_keys = np.zeros(0, dtype=np.int64)
-        self._next_key = model.n_base_rows
         base, rhs = model.base_rows(np.zeros(0, dtype=np.int64))
         backend.add_rows(base.tocsr(), rhs, rhs)
         self.add_cols(cols)
@@ -222,8 +188,6 @@ class LpModel:
         self.backend.add_rows(matrix, np.full(len(cuts), -np.inf), cuts.rhs)
         self.cuts = Cuts.stack([self.cuts, cuts])
         self.slack_age = np.concatenate([self.slack_age, np.zeros(len(cuts), dtype=np.int64)])
-        self.cut_keys = np.concatenate([self.cut_keys, np.arange(self._next_key, self._next_key + len(cuts))])
-        self._next_key += len(cuts)
 
     def purge(self, values: np.ndarray, age: int) -> None:
         """Delete cuts slack at ``values`` for ``age`` rounds in a row."""
@@ -233,7 +197,6 @@ class LpModel:
         if old.any():
             self.backend.delete_rows(self.model.n_base_rows + np.flatnonzero(old))
             self.cuts, self.slack_age = self.cuts.select(~old), self.slack_age[~old]
-            self.cut_keys = self.cut_keys[~old]
 
     def drop_cols(self, positions: np.ndarray) -> None:
         """Delete backend columns ``positions`` (fixed to 0 or priced out: the search prices every
@@ -241,36 +204,6 @@ class LpModel:
         if len(positions):
             self.backend.delete_cols(positions)
             self.cols = np.delete(self.cols, positions)
-
-    def stored_basis(self) -> StoredBasis | None:
-        """The backend's current basis by model column and row key (``None``: it has none)."""
-        got = self.backend.statuses()
-        if got is None:
-            return None
-        col, row = got
-        keys = np.concatenate([np.arange(self.model.n_base_rows), self.cut_keys])
-        c, r = col != LOWER, row != BASIC
-        return StoredBasis(self.cols[c], col[c].astype(np.int8), keys[r], row[r].astype(np.int8))
-
-    def restore_basis(self, basis: StoredBasis) -> None:
-        """Start the next solve from ``basis``: columns and cuts added since it was stored start
-        nonbasic at their lower bound and basic, those gone are left out (the backend completes
-        what is not a basis then)."""
-        col = np.full(len(self.cols), LOWER, dtype=np.int8)
-        where = np.full(self.model.n_cols, -1, dtype=np.int64)
-        where[self.cols] = np.arange(len(self.cols))
-        at = where[basis.cols]
-        col[at[at >= 0]] = basis.col_status[at >= 0]
-        n_base = self.model.n_base_rows
-        row = np.full(n_base + len(self.cut_keys), BASIC, dtype=np.int8)
-        base = basis.rows < n_base
-        row[basis.rows[base]] = basis.row_status[base]
-        keys, status = basis.rows[~base], basis.row_status[~base]
-        pos = np.searchsorted(self.cut_keys, keys)  # (the keys are increasing)
-        kept = pos < len(self.cut_keys)
-        kept[kept] = self.cut_keys[pos[kept]] == keys[kept]
-        row[n_base + pos[kept]] = status[kept]
-        self.backend.set_statuses(col, row)
 
     def fix_zero(self, positions: np.ndarray) -> None:
         """Fix backend columns to 0."""
@@ -316,6 +249,8 @@ class HighsBackend:
         self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
         self.stalls = 0  # runs stopped by the iteration limit and restarted
         self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
+        self.cold_starts = 0  # LPs solved from no basis by request (:meth:`start_cold`)
+        self._cold = False
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""
@@ -356,22 +291,9 @@ class HighsBackend:
         """Start the next solve from ``basis``."""
         self.h.setBasis(basis)
 
-    def statuses(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The current basis as HiGHS's status codes (``None`` when it has none)."""
-        basis = self.h.getBasis()
-        if not basis.valid:
-            return None
-        return (np.fromiter((int(s) for s in basis.col_status), np.int8, len(basis.col_status)),
-                np.fromiter((int(s) for s in basis.row_status), np.int8, len(basis.row_status)))
-
-    def set_statuses(self, cols: np.ndarray, rows: np.ndarray) -> None:
-        """Start the next solve from these codes, as an alien basis (HiGHS completes it)."""
-        status = {int(s): s for s in self._hs.HighsBasisStatus.__members__.values()}
-        basis = self._hs.HighsBasis()
-        basis.col_status = [status[c] for c in np.asarray(cols).tolist()]
-        basis.row_status = [status[r] for r in np.asarray(rows).tolist()]
-        basis.valid, basis.alien = True, True
-        self.h.setBasis(basis)
+    def start_cold(self) -> None:
+        """Solve the next LP without iteration limit by the interior point method, from no basis."""
+        self._cold = True
 
     def _set_time_limit(self, seconds: float) -> None:
         # HiGHS compares time_limit with the object's run time summed over all its runs
@@ -402,20 +324,26 @@ class HighsBackend:
         hot-started branch-and-cut LP ran 245,000 iterations (490 s) where the same LP and basis read
         from files took 4,600 (3 s); some stalled from their start basis too, with HiGHS's state
         cleared, and took 14,000-17,500 dual simplex iterations (24-31 s) from no basis, 1-2 s by the
-        interior point method.
+        interior point method. After :meth:`start_cold` the next such solve goes to the interior point
+        method at once.
         """
         self._set_time_limit(time_limit)
         self.h.setOptionValue("objective_bound", float(cutoff))
         limit = int(max(STALL_ITERATIONS, STALL_PER_LINE * (self.h.getNumRow() + self.h.getNumCol())))
         if iterations is not None:
             limit = min(limit, iterations)
-        status = self._run(limit)
         stopped = self._hs.HighsModelStatus.kIterationLimit
-        if status == stopped and iterations is not None and iterations <= limit:
-            return LpResult("stopped", self.h.getInfo().objective_function_value)
-        if status == stopped:
-            self.stalls += 1
+        if self._cold and iterations is None:
+            self._cold = False
+            self.cold_starts += 1
             status = self._interior()
+        else:
+            status = self._run(limit)
+            if status == stopped and iterations is not None and iterations <= limit:
+                return LpResult("stopped", self.h.getInfo().objective_function_value)
+            if status == stopped:
+                self.stalls += 1
+                status = self._interior()
         done = (self._hs.HighsModelStatus.kOptimal, self._hs.HighsModelStatus.kInfeasible,
                 self._hs.HighsModelStatus.kObjectiveBound, self._hs.HighsModelStatus.kTimeLimit)
         if status not in done and iterations is None:  # (seen once at K = 50): again from no basis
@@ -509,12 +437,8 @@ class GurobiBackend:
     def set_basis(self, basis: Any) -> None:
         """Nothing (see :meth:`basis`)."""
 
-    def statuses(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """None (see :meth:`basis`)."""
-        return None
-
-    def set_statuses(self, cols: np.ndarray, rows: np.ndarray) -> None:
-        """Nothing (see :meth:`basis`)."""
+    def start_cold(self) -> None:
+        """Nothing (Gurobi chooses its own start; it solves the MILP itself)."""
 
     def _optimize(self, callback: Callable[..., None] | None = None) -> None:
         try:

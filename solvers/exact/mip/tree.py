@@ -1,9 +1,7 @@
-"""The open nodes of the branch and cut: their bound, column fixes, branching and stored basis.
+"""The open nodes of the branch and cut: their bound, column fixes and the branching that made them.
 
 A node's column fixes are per backend column (-1 free, else the value the column is fixed to);
-columns priced into the LP after the node was made are free in it (:func:`padded`). A child
-popped from the open nodes (a jump in the tree) starts its first LP from its parent's last basis
-(:attr:`Node.basis`), not from wherever the previous node left the LP.
+columns priced into the LP after the node was made are free in it (:func:`padded`).
 """
 
 from __future__ import annotations
@@ -11,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from gtsp_bench.solvers.exact.mip.backends import StoredBasis
 
 
 def padded(fixes: np.ndarray, n: int) -> np.ndarray:
@@ -36,12 +33,9 @@ class Node:
     branched
         The branching that made it (model column, up, the column's LP value and the LP bound in
         the parent), for the pseudo-costs.
-    basis
-        The parent's basis after its last LP (``None``: none stored).
     """
 
     bound: float
     seq: int
     fixes: np.ndarray = field(compare=False)
     branched: tuple[int, bool, float, float] | None = field(default=None, compare=False)
-    basis: StoredBasis | None = field(default=None, compare=False)
