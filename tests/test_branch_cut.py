@@ -88,13 +88,13 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
 
 
 @pytest.mark.parametrize("dive", [True, False])
-def test_a_node_taken_from_the_open_ones_starts_from_its_parents_basis(dive, monkeypatch):
+def test_a_node_after_a_jump_starts_cold(dive, monkeypatch):
     """A K = 16 instance left to the branch and cut (two root rounds, greedy tour), every jump
     counted as one: each node taken from the open ones (every node but the first when nothing
-    dives) starts from its parent's stored basis, a dived-into child does not; with no jump large
-    enough, no basis is restored; the proof is the one of the search without stored bases."""
+    dives) has its first LP solved from no basis, a dived-into child not; with no jump large
+    enough, none is; the proof is the same."""
     from gtsp_bench.solvers.exact.mip import branch_cut
-    from gtsp_bench.solvers.exact.mip.backends import HighsBackend, LpModel
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
 
     from gtsp_bench.generator import generate_instance
 
@@ -105,14 +105,13 @@ def test_a_node_taken_from_the_open_ones_starts_from_its_parents_basis(dive, mon
     options = MipOptions(root_rounds=2, lns_trials=0)
     r = solve_exact(problem, HighsBackend, options)
     assert r.status == "optimal" and r.stats["bc_nodes"] >= 3
-    restores = r.stats["basis_restores"]
-    assert restores == r.stats["bc_nodes"] - 1 if not dive else 1 <= restores < r.stats["bc_nodes"] - 1
+    cold = r.stats["lp_cold_starts"]
+    assert cold == r.stats["jumps"]
+    assert cold == r.stats["bc_nodes"] - 1 if not dive else 1 <= cold < r.stats["bc_nodes"] - 1
     if dive:
         return
     monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 10**9)
-    assert "basis_restores" not in solve_exact(problem, HighsBackend, options).stats
-    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 0)
-    monkeypatch.setattr(LpModel, "restore_basis", lambda self, basis: None)
-    plain = solve_exact(problem, HighsBackend, options)
-    assert plain.status == "optimal"
-    assert r.objective == pytest.approx(plain.objective, rel=1e-12)
+    warm = solve_exact(problem, HighsBackend, options)
+    assert warm.stats["lp_cold_starts"] == 0 and "jumps" not in warm.stats
+    assert warm.status == "optimal"
+    assert r.objective == pytest.approx(warm.objective, rel=1e-12)

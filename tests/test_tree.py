@@ -19,6 +19,6 @@ def test_nodes_come_off_the_heap_by_bound_then_creation():
     free = np.zeros(0, dtype=np.int8)
     heap: list[Node] = []
     for bound, seq in ((3.0, 1), (1.0, 4), (1.0, 2), (2.0, 3)):
-        heapq.heappush(heap, Node(bound, seq, free, basis=None))
+        heapq.heappush(heap, Node(bound, seq, free))
     assert [(n.bound, n.seq) for n in (heapq.heappop(heap) for _ in range(4))] == [
         (1.0, 2), (1.0, 4), (2.0, 3), (3.0, 1)]
