@@ -163,3 +163,30 @@ def test_a_run_ending_otherwise_is_solved_again_from_no_basis():
     backend.h.clearSolver()
     assert backend.solve_lp(60.0, iterations=10**6).status == "stopped"
     assert backend.retries == 1 and len(calls) == 1
+
+
+def test_a_cold_start_is_solved_by_the_interior_point_method():
+    """Once a run has stalled, after ``start_cold`` the next LP without iteration limit is solved
+    by the interior point method (an iteration-limited one before it is not): the same optimum,
+    counted once, and HiGHS back on the dual simplex from that basis afterwards. Before any
+    stall, ``start_cold`` does nothing."""
+    plain, _ = _lp(HighsBackend, seed=4)
+    cold, _ = _lp(HighsBackend, seed=4)
+    backend = cold.backend
+    expected = plain.backend.solve_lp(60.0)
+    plain.backend.start_cold()
+    plain.backend.solve_lp(60.0)
+    assert plain.backend.h.getInfo().ipm_iteration_count == 0 and plain.backend.cold_starts == 0
+    backend.stalls = 1  # (as after a stalled run)
+    backend.start_cold()
+    backend.solve_lp(60.0, iterations=1)
+    assert backend.h.getInfo().ipm_iteration_count == 0 and backend.cold_starts == 0
+    res = backend.solve_lp(60.0)
+    assert backend.h.getInfo().ipm_iteration_count > 0 and backend.cold_starts == 1
+    assert res.status == expected.status == "optimal"
+    np.testing.assert_allclose(res.objective, expected.objective, rtol=1e-9)
+    assert backend.h.getOptionValue("solver")[1] == "choose"
+    backend.solve_lp(60.0)
+    info = backend.h.getInfo()
+    assert info.ipm_iteration_count == 0 and info.simplex_iteration_count == 0
+    assert backend.cold_starts == 1 and backend.stalls == 1

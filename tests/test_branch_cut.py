@@ -85,3 +85,38 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-9)
     assert r.stats["root_rounds"] >= 1
+
+
+@pytest.mark.parametrize("dive", [True, False])
+def test_a_node_after_a_jump_starts_cold(dive, monkeypatch):
+    """A K = 16 instance left to the branch and cut (two root rounds, greedy tour), every jump
+    counted as one, HiGHS told that a run stalled: each node taken from the open ones (every node
+    but the first when nothing dives) has its first LP solved from no basis, a dived-into child
+    not; with no jump large enough, none is; the proof is the same."""
+    from gtsp_bench.solvers.exact.mip import branch_cut
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
+
+    from gtsp_bench.generator import generate_instance
+
+    class Stalled(HighsBackend):
+        def __init__(self, options: MipOptions) -> None:
+            super().__init__(options)
+            self.stalls = 1
+
+    if not dive:
+        monkeypatch.setattr(branch_cut, "DIVE_SHARE", -1.0)
+    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 0)
+    problem = price(generate_instance(16, 6, seed=8), 0.5)
+    options = MipOptions(root_rounds=2, lns_trials=0)
+    r = solve_exact(problem, Stalled, options)
+    assert r.status == "optimal" and r.stats["bc_nodes"] >= 3
+    cold = r.stats["lp_cold_starts"]
+    assert cold == r.stats["jumps"]
+    assert cold == r.stats["bc_nodes"] - 1 if not dive else 1 <= cold < r.stats["bc_nodes"] - 1
+    if dive:
+        return
+    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 10**9)
+    warm = solve_exact(problem, Stalled, options)
+    assert warm.stats["lp_cold_starts"] == 0 and "jumps" not in warm.stats
+    assert warm.status == "optimal"
+    assert r.objective == pytest.approx(warm.objective, rel=1e-12)

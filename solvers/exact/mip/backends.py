@@ -119,6 +119,12 @@ class Backend(Protocol):
         and columns)."""
         ...
 
+    def start_cold(self) -> None:
+        """Solve the next LP that has no iteration limit from no basis (HiGHS: by the interior
+        point method, once an LP has stalled), not from the last one: after a jump in the tree it
+        is far away."""
+        ...
+
     def solve_lp(self, time_limit: float, cutoff: float = math.inf,
                  iterations: int | None = None) -> LpResult:
         """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``, and
@@ -244,6 +250,8 @@ class HighsBackend:
         self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
         self.stalls = 0  # runs stopped by the iteration limit and restarted
         self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
+        self.cold_starts = 0  # LPs solved from no basis by request (:meth:`start_cold`)
+        self._cold = False
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""
@@ -284,6 +292,13 @@ class HighsBackend:
         """Start the next solve from ``basis``."""
         self.h.setBasis(basis)
 
+    def start_cold(self) -> None:
+        """Solve the next LP without iteration limit by the interior point method, from no basis,
+        once a run has stalled (:meth:`solve_lp`) in this object: where none does (GTSPLIB up to
+        442 nodes) the dual simplex from the last basis is fast, and other starting bases change
+        the search (31pr152 took 65 s instead of 13 s)."""
+        self._cold = self.stalls > 0
+
     def _set_time_limit(self, seconds: float) -> None:
         # HiGHS compares time_limit with the object's run time summed over all its runs
         self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
@@ -313,20 +328,26 @@ class HighsBackend:
         hot-started branch-and-cut LP ran 245,000 iterations (490 s) where the same LP and basis read
         from files took 4,600 (3 s); some stalled from their start basis too, with HiGHS's state
         cleared, and took 14,000-17,500 dual simplex iterations (24-31 s) from no basis, 1-2 s by the
-        interior point method.
+        interior point method. After :meth:`start_cold` the next such solve goes to the interior point
+        method at once.
         """
         self._set_time_limit(time_limit)
         self.h.setOptionValue("objective_bound", float(cutoff))
         limit = int(max(STALL_ITERATIONS, STALL_PER_LINE * (self.h.getNumRow() + self.h.getNumCol())))
         if iterations is not None:
             limit = min(limit, iterations)
-        status = self._run(limit)
         stopped = self._hs.HighsModelStatus.kIterationLimit
-        if status == stopped and iterations is not None and iterations <= limit:
-            return LpResult("stopped", self.h.getInfo().objective_function_value)
-        if status == stopped:
-            self.stalls += 1
+        if self._cold and iterations is None:
+            self._cold = False
+            self.cold_starts += 1
             status = self._interior()
+        else:
+            status = self._run(limit)
+            if status == stopped and iterations is not None and iterations <= limit:
+                return LpResult("stopped", self.h.getInfo().objective_function_value)
+            if status == stopped:
+                self.stalls += 1
+                status = self._interior()
         done = (self._hs.HighsModelStatus.kOptimal, self._hs.HighsModelStatus.kInfeasible,
                 self._hs.HighsModelStatus.kObjectiveBound, self._hs.HighsModelStatus.kTimeLimit)
         if status not in done and iterations is None:  # (seen once at K = 50): again from no basis
@@ -419,6 +440,9 @@ class GurobiBackend:
 
     def set_basis(self, basis: Any) -> None:
         """Nothing (see :meth:`basis`)."""
+
+    def start_cold(self) -> None:
+        """Nothing (Gurobi chooses its own start; it solves the MILP itself)."""
 
     def _optimize(self, callback: Callable[..., None] | None = None) -> None:
         try:
