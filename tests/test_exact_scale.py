@@ -57,11 +57,11 @@ def test_an_interrupted_run_resumes_from_its_csv(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(script, "solve", counting)
     base = ["--gtsplib", "none", "--uav", "4", "--seeds", "1", "--time-limit", "30", "--csv", str(out)]
-    assert script.main(base + ["--omegas", "0"]) == 0
+    assert script.main([*base, "--omegas", "0"]) == 0
     first = list(csv.DictReader(out.open()))
     assert calls == [("uav-K4-N20-s1", 0.0)]
     capsys.readouterr()
-    assert script.main(base + ["--omegas", "0,0.9"]) == 0
+    assert script.main([*base, "--omegas", "0,0.9"]) == 0
     text = capsys.readouterr().out
     assert calls == [("uav-K4-N20-s1", 0.0), ("uav-K4-N20-s1", 0.9)]
     assert text.count("  kept") == 1 and "UAV K=4: 2/2 proven" in text
@@ -72,7 +72,7 @@ def test_an_interrupted_run_resumes_from_its_csv(tmp_path, capsys, monkeypatch):
     assert len(calls) == 3
     rows = list(csv.DictReader(out.open()))
     assert sorted(float(r["time_limit_s"]) for r in rows) == [20.0, 30.0, 30.0]
-    assert script.main(base + ["--omegas", "0", "--redo"]) == 0
+    assert script.main([*base, "--omegas", "0", "--redo"]) == 0
     assert len(calls) == 4 and len(list(csv.DictReader(out.open()))) == 3
 
 
