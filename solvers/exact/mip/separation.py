@@ -148,8 +148,8 @@ class Cuts:
         columns of 217vm1084, 587,000, at once took more than 24 GiB)."""
         step = max(1, block // max(1, len(self.row)))
         parts = [sp.csc_array(self.matrix(model, cols[i:i + step])) for i in range(0, len(cols), step)]
-        if not parts:
-            return sp.csc_array((len(self), 0))
+        if len(parts) < 2:  # the usual case: one block (or no columns)
+            return parts[0] if parts else sp.csc_array((len(self), 0))
         return sp.hstack(parts, format="csc")
 
     def slack(self, model: GtspModel, values: np.ndarray) -> np.ndarray:
