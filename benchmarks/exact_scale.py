@@ -150,37 +150,44 @@ def _settings(args: argparse.Namespace) -> tuple[str, float, int]:
     return args.solver, float(args.time_limit), args.solver_seed
 
 
-def read_table(path: str) -> list[dict[str, str]]:
+@dataclass(frozen=True)
+class Line:
+    """One line of a CSV this benchmark wrote: its text fields, and parsed, the solve's key, the
+    settings it ran with, the row and its CPU seconds."""
+
+    fields: dict[str, str]
+    key: Key
+    settings: tuple[str, float, int]
+    row: Row
+    cpu_s: float
+
+
+def _line(r: dict[str, str]) -> Line:
+    omega = None if r["omega"] == "" else float(r["omega"])
+    row = Row(r["group"], r["instance"], omega, r["solver"], r["status"], float(r["objective"]),
+              float(r["lower_bound"]), float(r["runtime_s"]))
+    key = (r["group"], r["instance"], "" if omega is None else repr(omega))
+    return Line(r, key, (r["solver"], float(r["time_limit_s"]), int(r["solver_seed"])), row,
+                float(r["cpu_s"]))
+
+
+def read_table(path: str) -> list[Line]:
     """The lines of a CSV this benchmark wrote (none when the file is missing)."""
     try:
         with open(path, newline="", encoding="utf-8") as f:
-            lines = list(csv.DictReader(f))
+            fields = list(csv.DictReader(f))
     except FileNotFoundError:
         return []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(f"{path}: cannot read the table: {exc}") from None
-    for i, r in enumerate(lines, start=2):
+    lines = []
+    for i, r in enumerate(fields, start=2):
         try:
-            _line_key(r), _line_settings(r), _line_row(r)
+            lines.append(_line(r))
         except (KeyError, TypeError, ValueError):
             raise InputError(f"{path}: line {i} is not a row of this benchmark's table "
                              f"(columns {', '.join(COLUMNS)})") from None
     return lines
-
-
-def _line_key(r: dict[str, str]) -> Key:
-    return r["group"], r["instance"], "" if r["omega"] == "" else repr(float(r["omega"]))
-
-
-def _line_settings(r: dict[str, str]) -> tuple[str, float, int]:
-    return r["solver"], float(r["time_limit_s"]), int(r["solver_seed"])
-
-
-def _line_row(r: dict[str, str]) -> tuple[Row, float]:
-    omega = None if r["omega"] == "" else float(r["omega"])
-    row = Row(r["group"], r["instance"], omega, r["solver"], r["status"], float(r["objective"]),
-              float(r["lower_bound"]), float(r["runtime_s"]))
-    return row, float(r["cpu_s"])
 
 
 def _floats(text: str) -> list[float]:
@@ -217,8 +224,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run(args: argparse.Namespace) -> int:
     refs = gtsplib.best_known()
     lines = read_table(args.csv) if args.csv else []
-    mine = [r for r in lines if _line_settings(r) == _settings(args)]
-    kept = {} if args.redo else {_line_key(r): _line_row(r) for r in mine}
+    settings = _settings(args)
+    kept = {} if args.redo else {x.key: (x.row, x.cpu_s) for x in lines if x.settings == settings}
     print(f"{args.solver}, time limit {args.time_limit:g} s per solve", flush=True)
     print(HEADER + "\n" + "-" * len(HEADER), flush=True)
     done: list[tuple[Job, Row]] = []
@@ -243,8 +250,8 @@ def _run(args: argparse.Namespace) -> int:
             bad += 1
         if args.csv:
             ours = {_key(j) for j, _ in done}
-            others = [[r[c] for c in COLUMNS] for r in lines
-                      if not (_line_settings(r) == _settings(args) and _line_key(r) in ours)]
+            others = [[x.fields[c] for c in COLUMNS] for x in lines
+                      if not (x.settings == settings and x.key in ours)]
             write_csv(args.csv, COLUMNS, [record(j, r, c, args) for (j, r), c in zip(done, cpus, strict=True)]
                       + others)
     print(*summary(done), sep="\n")
