@@ -120,3 +120,25 @@ def test_a_node_after_a_jump_starts_cold(dive, monkeypatch):
     assert warm.stats["lp_cold_starts"] == 0 and "jumps" not in warm.stats
     assert warm.status == "optimal"
     assert r.objective == pytest.approx(warm.objective, rel=1e-12)
+
+
+def test_full_strong_branching_takes_every_candidate(monkeypatch):
+    """While strong-branching LPs finish (a small instance), every one of the closest candidates
+    is strong-branched: the reliability-branching budget (:data:`branching.MAX_STRONG`,
+    :data:`branching.LOOKAHEAD`) leaves the search unchanged."""
+    from gtsp_bench.solvers.exact.mip import branching
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
+
+    from gtsp_bench.generator import generate_instance
+
+    problem = price(generate_instance(16, 6, seed=8), 0.5)
+    options = MipOptions(root_rounds=2, lns_trials=0)
+    full = solve_exact(problem, HighsBackend, options)
+    assert full.status == "optimal" and "strong_partial" not in full.stats
+    assert full.stats["strong_lps"] > 2 * 2  # some node strong-branched more than 2 candidates
+    monkeypatch.setattr(branching, "MAX_STRONG", 1)
+    monkeypatch.setattr(branching, "LOOKAHEAD", 1)
+    capped = solve_exact(problem, HighsBackend, options)
+    for key in ("strong_lps", "bc_nodes", "node_lps"):
+        assert capped.stats[key] == full.stats[key]
+    assert capped.objective == pytest.approx(full.objective, rel=1e-12)

@@ -130,3 +130,16 @@ def test_reliability_needs_two_nodes_of_mostly_stopped_strong_lps():
     assert branching.reliability(2 * branching.CANDIDATES, branching.CANDIDATES)
     assert not branching.reliability(100, 49)
     assert branching.reliability(100, 50)
+
+
+def test_choose_by_default_strong_branches_at_most_max_strong():
+    """Each candidate scores better than the last (the look-ahead never stops it): the default
+    budget :data:`MAX_STRONG` does."""
+    from gtsp_bench.solvers.exact.mip.branching import MAX_STRONG
+
+    table = {i: StrongResult((1.0 + i, 1.0 + i), (False, False)) for i in range(8)}
+    calls: list[int] = []
+    c = choose(np.arange(8), np.arange(8), np.full(8, 0.5), 0.0, 100.0, PseudoCosts(8),
+               _strong_from(table, calls))
+    assert len(calls) == MAX_STRONG < 8
+    assert c.col == calls[-1]

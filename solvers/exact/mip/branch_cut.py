@@ -353,6 +353,7 @@ class _Search:
             absent = self.absent()
             # with columns absent, only the Lagrangian bound (below) may prune: no LP cutoff
             res = self.solve_lp(cutoff=self.ub - self.gap if len(absent) == 0 else math.inf)
+            self.stats["node_lps"] = self.stats.get("node_lps", 0) + 1
             if res.status in ("infeasible", "cutoff"):
                 return None
             if res.values is None or res.reduced_costs is None or res.duals is None:
@@ -453,9 +454,12 @@ class _Search:
         if len(cand) == 1:
             return int(cand[0]), float(round(values[cand[0]])), False
         absent = self.absent()
-        choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
-                        lambda c: self._strong(c, objective, absent, not full), stop=lambda: self.left() < 0,
-                        reliable=2**62 if full else None, lookahead=len(cand) if full else None)
+        with _Timer(self.stats, "branching_s"):
+            choice = choose(cand, self.lp.cols[cand], values[cand], objective, self.ub, self.pseudo,
+                            lambda c: self._strong(c, objective, absent, not full),
+                            stop=lambda: self.left() < 0, reliable=2**62 if full else None,
+                            lookahead=len(cand) if full else None,
+                            max_strong=len(cand) if full else None)
         if choice is None or choice.only:
             key = "strong_pruned" if choice is None else "strong_fixed"
             self.stats[key] = self.stats.get(key, 0) + 1
