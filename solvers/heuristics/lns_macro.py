@@ -84,3 +84,62 @@ def macro_tour(order: np.ndarray, edge: np.ndarray | tuple, node: np.ndarray, st
     t = np.ascontiguousarray(start[np.asarray(order, dtype=np.int64)], dtype=np.int64)
     kernels.reopt(t, edge, node, start, cluster_of)
     return t
+
+
+#: Points closer than this many times the median nearest-neighbour distance are in one blob.
+BLOB_REACH = 8.0
+#: A blob of more clusters than this is not re-planned (its reinsertion would be a restart).
+BLOB_MOST = 300
+
+
+def blob_labels(xy: np.ndarray, reach: float = BLOB_REACH) -> np.ndarray:
+    """The blob of each point: connected components of the graph joining points closer than
+    ``reach`` times the median distance from a point to its nearest other point."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    m = len(xy)
+    if m < 2:
+        return np.zeros(m, dtype=np.int64)
+    tree = cKDTree(xy)
+    gap = tree.query(xy, k=2)[0][:, 1]
+    pairs = tree.query_pairs(reach * float(np.median(gap)), output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
+    return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+def replan_blobs(t: np.ndarray, cost: float, labels: np.ndarray, edge: np.ndarray | tuple,
+                 node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
+                 half: int, rounds: int = 3) -> tuple[np.ndarray, float, int]:
+    """Re-plan each blob the cycle ``t`` (node ids, cost ``cost``) enters more than once: take out
+    every cluster whose head is in it, put them back one by one at their cheapest places (which
+    tends to join the blob's passes into one), local search; keep it when cheaper. Up to
+    ``rounds`` rounds over the blobs, until one changes nothing. Returns (tour, cost, blobs
+    re-planned)."""
+    n = len(t)
+    done = 0
+    for _ in range(rounds):
+        blob = labels[t]
+        entered = np.bincount(blob[blob != np.roll(blob, 1)], minlength=int(labels.max()) + 1)
+        changed = False
+        for b in np.flatnonzero(entered > 1):
+            mask = labels[t] == b
+            if mask.sum() > min(BLOB_MOST, n - 4):
+                continue
+            clusters = cluster_of[t[mask]]
+            new = kernels.insert(t[~mask], clusters, 0, 0.0, edge, node, start, near, cluster_of, True)
+            awake = np.zeros(n, dtype=np.bool_)
+            awake[clusters] = True
+            tol = kernels.REL_TOL * max(1.0, abs(cost))
+            if half > 0:
+                new_cost = kernels.local_search_window(new, edge, node, start, near, cluster_of, tol, awake,
+                                                       True, half, np.nan)
+            else:
+                new_cost = kernels.local_search(new, edge, node, start, near, cluster_of, tol, awake, True)
+            if new_cost < cost - tol:
+                t, cost, changed = new, new_cost, True
+                done += 1
+        if not changed:
+            break
+    return t, cost, done
