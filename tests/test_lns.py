@@ -174,6 +174,7 @@ def test_operators_are_all_used():
     ({"macro": 1}, "macro must be true or false"),
     ({"macro_iterations": -1}, "macro_iterations must be an integer >= 0"),
     ({"blobs": "no"}, "blobs must be true or false"),
+    ({"macro_restarts": 0}, "macro_restarts must be true or false"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -321,3 +322,14 @@ def test_blob_replans_never_below_dp_optimum(seed):
         assert sorted(r.order) == list(range(12))
         assert r.objective >= optimum - 1e-9 * optimum
         assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+
+
+def test_macro_cold_restarts_under_a_time_limit():
+    """With tiny trials, restart_after=1 and macro_restarts, a time-limited run makes many trials
+    (cold ones from new macro tours among them) and still reaches the DP optimum."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", iterations=20, restart_after=1, macro=True, macro_restarts=True,
+                              macro_iterations=2), inst, 0.5, seed=2, time_limit=0.5)
+    assert r.stats["trials"] > 3
+    assert r.objective == pytest.approx(optimum, rel=1e-9)

@@ -102,6 +102,7 @@ class LnsSettings:
     macro: bool | None = None
     macro_iterations: int = 5
     blobs: bool = False
+    macro_restarts: bool = False
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -138,6 +139,7 @@ class LnsSettings:
             check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
         check_bool("blobs", self.blobs)
+        check_bool("macro_restarts", self.macro_restarts)
 
     @property
     def hottest(self) -> float:
@@ -231,14 +233,18 @@ class _Search:
                                     np.ones(self.p.n_clusters, dtype=np.bool_), self.symmetric)
         return t, cost
 
+    def macro_applies(self) -> bool:
+        """Whether the first tour is the macro tour (``macro``, on a planar instance)."""
+        n = self.p.n_clusters
+        return self.centre is not None and self.s.macro_for(n) and n >= 5
+
     def first_tour(self, deadline: float | None) -> np.ndarray:
         """The first trial's start before the local search: the macro tour on a planar instance
         where ``macro`` asks for it (:mod:`gtsp_bench.solvers.heuristics.lns_macro`), else the
         greedy tour."""
-        n = self.p.n_clusters
-        if self.centre is None or not self.s.macro_for(n) or n < 5:
+        if not self.macro_applies():
             return greedy_tour(self.p, anchor_node(self.p))
-        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline)
+        order = centre_order(self.centre, self.s.macro_iterations * self.p.n_clusters, LARGE, deadline)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
 
     def replan(self, t: np.ndarray, cost: float) -> tuple[np.ndarray, float]:
@@ -274,8 +280,11 @@ class _Search:
                 timed_out = True
                 break
             if cold and fails >= s.restart_after:
-                base, base_cost = self.local_search(kernels.random_insertion_tour(
-                    self.edge, self.node, self.start, self.near, self.cluster_of))
+                if s.macro_restarts and self.macro_applies():
+                    base, base_cost = self.replan(*self.local_search(self.first_tour(deadline)))
+                else:
+                    base, base_cost = self.local_search(kernels.random_insertion_tour(
+                        self.edge, self.node, self.start, self.near, self.cluster_of))
                 heat, fails = 1.0, 0
                 if base_cost < best_cost - REL_TOL * abs(best_cost):
                     best, best_cost = base.copy(), base_cost
@@ -412,6 +421,10 @@ class Lns:
         trial, re-plan every blob the tour enters more than once: its clusters taken out and put
         back by cheapest insertion, kept when cheaper (``replan_blobs`` of
         :mod:`gtsp_bench.solvers.heuristics.lns_macro`). Default off.
+    macro_restarts
+        Where the first tour is the macro tour, the cold restarts (``restart_after``) also start
+        from a macro tour (a new one: the centre tour is drawn again) instead of a random-insertion
+        tour. Default off.
     """
 
     asymmetric = True
@@ -423,13 +436,13 @@ class Lns:
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool | None = None,
-        macro_iterations: int = 5, blobs: bool = False,
+        macro_iterations: int = 5, blobs: bool = False, macro_restarts: bool = False,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
-                                    macro_iterations, blobs)
+                                    macro_iterations, blobs, macro_restarts)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
