@@ -173,8 +173,6 @@ def test_operators_are_all_used():
     ({"fit_trials": 0}, "fit_trials must be an integer >= 1"),
     ({"macro": 1}, "macro must be true or false"),
     ({"macro_iterations": -1}, "macro_iterations must be an integer >= 0"),
-    ({"blobs": "no"}, "blobs must be true or false"),
-    ({"macro_restarts": 0}, "macro_restarts must be true or false"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -308,28 +306,3 @@ def test_macro_starts_large_cycles_elsewhere():
         assert sorted(r.order) == list(range(n))
         assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert runs[0].order != runs[1].order
-
-
-@pytest.mark.parametrize("seed", range(2))
-def test_blob_replans_never_below_dp_optimum(seed):
-    """The blob re-plans switched on (K = 12 UAV instances, each cluster a blob of its own here),
-    with and without the macro tour: a valid tour, never below the DP's proven optimum, priced as
-    the evaluator does (the re-plan itself: tests/test_lns_macro.py)."""
-    inst = generate_instance(12, 3, seed=40 + seed, zeta=10.0, area=4000.0)
-    optimum = run_solver("dp", inst, 0.5).objective
-    for macro in (True, False):
-        r = run_solver(get_solver("lns", macro=macro, blobs=True, **CONVERGE), inst, 0.5, seed=seed)
-        assert sorted(r.order) == list(range(12))
-        assert r.objective >= optimum - 1e-9 * optimum
-        assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
-
-
-def test_macro_cold_restarts_under_a_time_limit():
-    """With tiny trials, restart_after=1 and macro_restarts, a time-limited run makes many trials
-    (cold ones from new macro tours among them) and still reaches the DP optimum."""
-    inst = generate_instance(9, 3, seed=4)
-    optimum = run_solver("dp", inst, 0.5).objective
-    r = run_solver(get_solver("lns", iterations=20, restart_after=1, macro=True, macro_restarts=True,
-                              macro_iterations=2), inst, 0.5, seed=2, time_limit=0.5)
-    assert r.stats["trials"] > 3
-    assert r.objective == pytest.approx(optimum, rel=1e-9)

@@ -9,13 +9,7 @@ import pytest
 from gtsp_bench.solvers.heads import optimal_heads
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
-from gtsp_bench.solvers.heuristics.lns_macro import (
-    blob_labels,
-    centre_order,
-    cluster_centres,
-    macro_tour,
-    replan_blobs,
-)
+from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
 
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
@@ -98,45 +92,3 @@ def test_macro_tour_keeps_the_order_with_optimal_heads():
     _, best = optimal_heads(problem, order)
     assert problem.tour_cost(t) == pytest.approx(best, rel=1e-12)
     assert kernels.tour_cost(t, edge, node) == pytest.approx(best, rel=1e-12)
-
-
-def test_blob_labels_split_far_groups():
-    """Two grids of points far apart are two blobs; a lone far point is a third."""
-    grid = np.array([(x, y) for x in range(5) for y in range(5)], dtype=float)
-    xy = np.vstack([grid, grid + 1000.0, [[5000.0, 0.0]]])
-    labels = blob_labels(xy)
-    assert len(set(labels[:25])) == len(set(labels[25:50])) == 1
-    assert len({labels[0], labels[25], labels[50]}) == 3
-
-
-def _blob_problem():
-    """Single-node clusters in two far blobs, as the kernels take them (points, unrounded)."""
-    grid = np.array([(x, y) for x in range(4) for y in range(4)], dtype=float)
-    xy = np.vstack([grid, grid + np.array([1000.0, 0.0])])
-    xy.setflags(write=False)
-    k = len(xy)
-    node = np.zeros(k)
-    node.setflags(write=False)
-    start = np.arange(k + 1, dtype=np.int64)
-    cluster_of = np.arange(k, dtype=np.int64)
-    near = kernels.neighbours((xy, 1, 1.0), start, 8, xy)
-    return xy, (xy, 1, 1.0), node, start, near, cluster_of
-
-
-@pytest.mark.parametrize("half", [0, 4])
-def test_replan_blobs_joins_the_passes_of_a_blob(half):
-    """A tour that crosses between two blobs four times: the re-plan keeps a valid tour, enters
-    each blob once and is cheaper; a tour entering each blob once is left as it is."""
-    xy, costs, node, start, near, cluster_of = _blob_problem()
-    labels = blob_labels(xy)
-    a, b = np.arange(16), np.arange(16, 32)
-    t = np.concatenate([a[:8], b[:8], a[8:], b[8:]]).astype(np.int64)
-    cost = kernels.tour_cost(t, costs, node)
-    new, new_cost, done = replan_blobs(t, cost, labels, costs, node, start, near, cluster_of, half)
-    assert done >= 1 and new_cost < cost - 1000.0
-    assert new_cost == pytest.approx(kernels.tour_cost(new, costs, node), rel=1e-12)
-    assert sorted(new.tolist()) == list(range(32))
-    blob = labels[new]
-    assert int(np.sum(blob != np.roll(blob, 1))) == 2
-    same, same_cost, none = replan_blobs(new, new_cost, labels, costs, node, start, near, cluster_of, half)
-    assert none == 0 and same_cost == new_cost and np.array_equal(same, new)

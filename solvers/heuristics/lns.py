@@ -45,13 +45,7 @@ import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
-from gtsp_bench.solvers.heuristics.lns_macro import (
-    blob_labels,
-    centre_order,
-    cluster_centres,
-    macro_tour,
-    replan_blobs,
-)
+from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -101,8 +95,6 @@ class LnsSettings:
     quadrants: bool | None = None
     macro: bool | None = None
     macro_iterations: int = 5
-    blobs: bool = False
-    macro_restarts: bool = False
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -138,8 +130,6 @@ class LnsSettings:
         if self.macro is not None:
             check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
-        check_bool("blobs", self.blobs)
-        check_bool("macro_restarts", self.macro_restarts)
 
     @property
     def hottest(self) -> float:
@@ -213,16 +203,13 @@ class _Search:
         self.symmetric = bool(problem.symmetric)
         n = problem.n_clusters
         count = settings.neighbours_for(n, self.symmetric)
-        points = points_of(problem) if settings.quadrants_for(n) or settings.macro_for(n) or settings.blobs \
-            else None
+        points = points_of(problem) if settings.quadrants_for(n) or settings.macro_for(n) else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
         if points is None or not settings.quadrants_for(n):
             self.near = kernels.neighbours(self.edge, self.start, count)
         else:
             self.near = kernels.neighbours(self.edge, self.start, count, self.centre)
-        #: The blob of each node (``blobs`` on a planar instance), else None.
-        self.labels = blob_labels(points[0]) if settings.blobs and points is not None else None
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
 
@@ -233,34 +220,22 @@ class _Search:
                                     np.ones(self.p.n_clusters, dtype=np.bool_), self.symmetric)
         return t, cost
 
-    def macro_applies(self) -> bool:
-        """Whether the first tour is the macro tour (``macro``, on a planar instance)."""
-        n = self.p.n_clusters
-        return self.centre is not None and self.s.macro_for(n) and n >= 5
-
     def first_tour(self, deadline: float | None) -> np.ndarray:
         """The first trial's start before the local search: the macro tour on a planar instance
         where ``macro`` asks for it (:mod:`gtsp_bench.solvers.heuristics.lns_macro`), else the
         greedy tour."""
-        if not self.macro_applies():
+        n = self.p.n_clusters
+        if self.centre is None or not self.s.macro_for(n) or n < 5:
             return greedy_tour(self.p, anchor_node(self.p))
-        order = centre_order(self.centre, self.s.macro_iterations * self.p.n_clusters, LARGE, deadline)
+        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
-
-    def replan(self, t: np.ndarray, cost: float) -> tuple[np.ndarray, float]:
-        """``t`` with its blobs re-planned (``blobs``; :func:`replan_blobs`), and its cost."""
-        if self.labels is None:
-            return t, cost
-        t, cost, _ = replan_blobs(t, cost, self.labels, self.edge, self.node, self.start, self.near,
-                                  self.cluster_of, self.s.reopt_window_for(self.p.n_clusters))
-        return t, cost
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
         """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
         stats, whether the deadline came before convergence)."""
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
-        best, best_cost = self.replan(*self.local_search(self.first_tour(deadline)))
+        best, best_cost = self.local_search(self.first_tour(deadline))
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
         floor = FIT_FLOOR * n if n <= LARGE else iterations  # a fitted trial's least length
@@ -280,11 +255,8 @@ class _Search:
                 timed_out = True
                 break
             if cold and fails >= s.restart_after:
-                if s.macro_restarts and self.macro_applies():
-                    base, base_cost = self.replan(*self.local_search(self.first_tour(deadline)))
-                else:
-                    base, base_cost = self.local_search(kernels.random_insertion_tour(
-                        self.edge, self.node, self.start, self.near, self.cluster_of))
+                base, base_cost = self.local_search(kernels.random_insertion_tour(
+                    self.edge, self.node, self.start, self.near, self.cluster_of))
                 heat, fails = 1.0, 0
                 if base_cost < best_cost - REL_TOL * abs(best_cost):
                     best, best_cost = base.copy(), base_cost
@@ -327,10 +299,6 @@ class _Search:
             if timed_out:
                 break
             trials += 1
-            if self.labels is not None:
-                trial_best, costs[2] = self.replan(trial_best, float(costs[2]))
-                if costs[2] < best_cost - REL_TOL * abs(best_cost):
-                    best, best_cost = trial_best.copy(), float(costs[2])
             # A trial that did not improve its base: the next one starts hotter (and after
             # restart_after of them, from a fresh tour).
             if costs[2] < base_cost - REL_TOL * abs(base_cost):
@@ -415,16 +383,6 @@ class Lns:
     macro_iterations
         Iterations per cluster of the centre tour's annealing trial (>= 0; 0: random insertion and
         local search only).
-    blobs
-        On a planar instance, group the points into blobs (points closer than ``BLOB_REACH`` times
-        the median nearest-neighbour distance) and, after the first local search and after each
-        trial, re-plan every blob the tour enters more than once: its clusters taken out and put
-        back by cheapest insertion, kept when cheaper (``replan_blobs`` of
-        :mod:`gtsp_bench.solvers.heuristics.lns_macro`). Default off.
-    macro_restarts
-        Where the first tour is the macro tour, the cold restarts (``restart_after``) also start
-        from a macro tour (a new one: the centre tour is drawn again) instead of a random-insertion
-        tour. Default off.
     """
 
     asymmetric = True
@@ -436,13 +394,13 @@ class Lns:
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool | None = None,
-        macro_iterations: int = 5, blobs: bool = False, macro_restarts: bool = False,
+        macro_iterations: int = 5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
-                                    macro_iterations, blobs, macro_restarts)
+                                    macro_iterations)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
