@@ -270,10 +270,10 @@ def test_large_cycles_fit_only_whole_trials():
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
-def test_macro_tour_defaults_to_large_cycles():
-    """The macro first tour is the default only above LARGE clusters; a given value wins."""
-    assert not LnsSettings().macro_for(LARGE) and LnsSettings().macro_for(LARGE + 1)
-    assert LnsSettings(macro=True).macro_for(10) and not LnsSettings(macro=False).macro_for(5000)
+def test_macro_tour_is_off_by_default():
+    """The macro first tour is opt-in: the default run on a planar instance above LARGE clusters
+    is the run with macro=False."""
+    assert LnsSettings().macro is False
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -296,13 +296,16 @@ def test_macro_needs_points():
 
 
 def test_macro_starts_large_cycles_elsewhere():
-    """Above LARGE clusters the default run starts from the macro tour and macro=False from the
-    greedy one: both valid, different searches."""
+    """Above LARGE clusters (the windowed path) macro=True starts from the macro tour, and the
+    default and macro=False from the greedy one: all valid, the macro run a different search,
+    the other two the same run."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    runs = [run_solver(get_solver("lns", macro=m, iterations=200, trials=1, **CONVERGE), inst, 0.5, seed=1)
-            for m in (None, False)]
+    runs = [run_solver(get_solver("lns", iterations=200, trials=1, **options, **CONVERGE), inst, 0.5, seed=1)
+            for options in ({"macro": True}, {}, {"macro": False})]
     for r in runs:
         assert sorted(r.order) == list(range(n))
         assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert runs[0].order != runs[1].order
+    default, off = ((r.order, r.heads, r.objective) for r in runs[1:])
+    assert default == off

@@ -17,8 +17,8 @@ simulated-annealing acceptance, the temperature cooling geometrically over a tri
 ``start_temperature`` to ``end_temperature`` times the mean edge cost of the tour. A trial ends
 after ``iterations`` iterations or ``patience`` without a new trial best (by default only with
 ``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
-hotter start); the first trial starts from the greedy tour (above ``LARGE`` clusters on planar
-instances the macro tour, ``macro``) improved by the local search, later ones
+hotter start); the first trial starts from the greedy tour (or on planar instances, with ``macro``, the
+macro tour) improved by the local search, later ones
 from the best tour so far, and a trial that did not improve it makes the next one hotter
 (temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
 its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
@@ -93,7 +93,7 @@ class LnsSettings:
     fit_trials: int = 32
     points: bool | None = None
     quadrants: bool | None = None
-    macro: bool | None = None
+    macro: bool = False
     macro_iterations: int = 5
 
     def __post_init__(self) -> None:
@@ -127,8 +127,7 @@ class LnsSettings:
             check_bool("points", self.points)
         if self.quadrants is not None:
             check_bool("quadrants", self.quadrants)
-        if self.macro is not None:
-            check_bool("macro", self.macro)
+        check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
 
     @property
@@ -155,11 +154,6 @@ class LnsSettings:
         """Whether the neighbour lists of ``n`` clusters take the nearest in each quadrant
         (default: above ``LARGE`` clusters)."""
         return self.quadrants if self.quadrants is not None else n > LARGE
-
-    def macro_for(self, n: int) -> bool:
-        """Whether a planar instance of ``n`` clusters starts from the macro tour (default: above
-        ``LARGE`` clusters)."""
-        return self.macro if self.macro is not None else n > LARGE
 
     def max_removals_for(self, n: int) -> int:
         """Most clusters removed in one iteration for ``n`` clusters (default 100 up to
@@ -203,7 +197,7 @@ class _Search:
         self.symmetric = bool(problem.symmetric)
         n = problem.n_clusters
         count = settings.neighbours_for(n, self.symmetric)
-        points = points_of(problem) if settings.quadrants_for(n) or settings.macro_for(n) else None
+        points = points_of(problem) if settings.quadrants_for(n) or settings.macro else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
         if points is None or not settings.quadrants_for(n):
@@ -225,7 +219,7 @@ class _Search:
         where ``macro`` asks for it (:mod:`gtsp_bench.solvers.heuristics.lns_macro`), else the
         greedy tour."""
         n = self.p.n_clusters
-        if self.centre is None or not self.s.macro_for(n) or n < 5:
+        if self.centre is None or not self.s.macro or n < 5:
             return greedy_tour(self.p, anchor_node(self.p))
         order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
@@ -375,11 +369,13 @@ class Lns:
         above ``LARGE`` clusters). On clustered instances the nearest clusters all lie in one
         group, and no move would join two groups.
     macro
-        The first trial starts from the macro tour (on a planar instance; default: above ``LARGE``
-        clusters) instead of the greedy tour: the clusters in the order of a short tour through
-        their centres, solved by these kernels on a one-node-per-cluster instance, with optimal
-        heads for that order (:mod:`gtsp_bench.solvers.heuristics.lns_macro`). On large clustered
-        instances the first trial keeps the greedy tour's order of the point groups.
+        The first trial starts from the macro tour (on a planar instance; default off) instead of
+        the greedy tour: the clusters in the order of a short tour through their centres, solved
+        by these kernels on a one-node-per-cluster instance, with optimal heads for that order
+        (:mod:`gtsp_bench.solvers.heuristics.lns_macro`). From the greedy tour the first trial
+        keeps its order of the point groups; on the five large files above 1 % the macro tour
+        lowered the mean gap (60 s, seeds 1-3), but it raised 633E3k.0, 1183rl5915 and
+        2702usa13509 above 1 % (docs/notes/lns-vs-glns.md), so it is not the default.
     macro_iterations
         Iterations per cluster of the centre tour's annealing trial (>= 0; 0: random insertion and
         local search only).
@@ -393,7 +389,7 @@ class Lns:
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
-        points: bool | None = None, quadrants: bool | None = None, macro: bool | None = None,
+        points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
