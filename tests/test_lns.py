@@ -171,6 +171,8 @@ def test_operators_are_all_used():
     ({"reopt_window": -1}, "reopt_window must be an integer >= 0"),
     ({"fit_to_time": 1}, "fit_to_time must be true or false"),
     ({"fit_trials": 0}, "fit_trials must be an integer >= 1"),
+    ({"macro": 1}, "macro must be true or false"),
+    ({"macro_iterations": -1}, "macro_iterations must be an integer >= 0"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -266,3 +268,44 @@ def test_large_cycles_fit_only_whole_trials():
     assert r.stats["iterations"] >= 25 * (n + 1) * (r.stats["trials"] - 1)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+
+
+def test_macro_tour_is_off_by_default():
+    """The macro first tour is opt-in: the default run on a planar instance above LARGE clusters
+    is the run with macro=False."""
+    assert LnsSettings().macro is False
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_macro_start_never_below_dp_optimum(seed):
+    """The macro first tour forced on K = 12 UAV instances (the depot a cluster of its own): a
+    valid tour, never below the DP's proven optimum, priced as the evaluator prices it."""
+    inst = generate_instance(12, 3, seed=30 + seed)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", macro=True, macro_iterations=5, **CONVERGE), inst, 0.5, seed=seed)
+    assert sorted(r.order) == list(range(12))
+    assert r.objective >= optimum - 1e-9 * optimum
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+
+
+def test_macro_needs_points():
+    """On explicit costs (no coordinates) macro=True is the greedy start: the same run as without."""
+    inst = _asymmetric(9, 1)
+    runs = [run_solver(get_solver("lns", macro=m, **CONVERGE), inst, None, seed=2) for m in (True, False)]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+def test_macro_starts_large_cycles_elsewhere():
+    """Above LARGE clusters (the windowed path) macro=True starts from the macro tour, and the
+    default and macro=False from the greedy one: all valid, the macro run a different search,
+    the other two the same run."""
+    n = LARGE + 20
+    inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+    runs = [run_solver(get_solver("lns", iterations=200, trials=1, **options, **CONVERGE), inst, 0.5, seed=1)
+            for options in ({"macro": True}, {}, {"macro": False})]
+    for r in runs:
+        assert sorted(r.order) == list(range(n))
+        assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert runs[0].order != runs[1].order
+    default, off = ((r.order, r.heads, r.objective) for r in runs[1:])
+    assert default == off

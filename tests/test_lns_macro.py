@@ -1,0 +1,94 @@
+"""The macro first tour of lns: centres, the tour through them, optimal heads for its order."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
+from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
+
+from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
+
+from .conftest import GTSPLIB
+
+
+def _length(points: np.ndarray, order: np.ndarray) -> float:
+    """Length of the closed tour through ``points`` in ``order``."""
+    p = points[order]
+    return float(np.hypot(*(p - np.roll(p, -1, axis=0)).T).sum())
+
+
+def _ring(k: int, seed: int) -> np.ndarray:
+    """``k`` points on a circle of radius 100, shuffled (the shortest tour goes round it)."""
+    angle = np.random.default_rng(seed).permutation(k) * 2 * np.pi / k
+    return np.column_stack([100 * np.cos(angle), 100 * np.sin(angle)])
+
+
+def test_cluster_centres_are_the_means_of_each_cluster():
+    """Each centre is the mean of its cluster's points (clusters of 1, 2 and 3 points)."""
+    xy = np.array([[0.0, 0.0], [2.0, 4.0], [4.0, 0.0], [1.0, 1.0], [3.0, 3.0], [5.0, 2.0]])
+    start = np.array([0, 1, 3, 6])
+    np.testing.assert_allclose(cluster_centres(xy, start), [[0, 0], [3, 2], [3, 2]])
+
+
+@pytest.mark.parametrize("iterations", [0, 200])
+def test_centre_order_visits_every_point_once(iterations):
+    """The centre tour is a permutation of the points; on a ring it is the ring (length 2 pi r
+    up to the chords), with or without the annealing trial."""
+    pts = _ring(60, seed=3)
+    kernels.seed(1)
+    order = centre_order(pts, iterations, large=400)
+    assert sorted(order.tolist()) == list(range(60))
+    assert _length(pts, order) == pytest.approx(60 * 2 * 100 * np.sin(np.pi / 60), rel=1e-9)
+
+
+def test_centre_order_is_seeded_and_the_trial_only_shortens_it():
+    """The same kernel seed gives the same order; the trial starts from the local search's tour,
+    so with it the tour is never longer than without it (same seed), and usually shorter."""
+    pts = np.random.default_rng(7).uniform(0, 1000, size=(150, 2))
+    runs = []
+    for iterations in (0, 1500, 1500):
+        kernels.seed(4)
+        runs.append(centre_order(pts, iterations, large=100))  # the large-cycle path above 100
+    assert np.array_equal(runs[1], runs[2])
+    assert _length(pts, runs[1]) <= _length(pts, runs[0]) + 1e-9
+    for order in runs:
+        assert sorted(order.tolist()) == list(range(150))
+
+
+def test_centre_order_stops_at_a_past_deadline():
+    """A deadline already past cuts the trial after its first chunk: still a valid order."""
+    pts = np.random.default_rng(2).uniform(0, 1000, size=(80, 2))
+    kernels.seed(0)
+    order = centre_order(pts, 10**9, large=400, deadline=time.perf_counter() - 1.0)
+    assert sorted(order.tolist()) == list(range(80))
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_centre_order_of_very_few_points(k):
+    """Up to three points every order is the same cycle."""
+    assert centre_order(np.zeros((k, 2)), 10, large=400).tolist() == list(range(k))
+
+
+def test_macro_tour_keeps_the_order_with_optimal_heads():
+    """On 11berlin52 (no depot) the macro tour visits every cluster once, in the given order (up
+    to rotation), one node of each, at the cost of optimal_heads for that order."""
+    problem = price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
+    start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
+    cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
+    edge = kernel_costs(problem, False)
+    node = np.ascontiguousarray(problem.node_cost, dtype=np.float64)
+    order = np.random.default_rng(5).permutation(problem.n_clusters)
+    t = macro_tour(order, edge, node, start, cluster_of)
+    visited = cluster_of[t]
+    assert sorted(visited.tolist()) == list(range(problem.n_clusters))
+    shift = int(np.flatnonzero(visited == order[0])[0])
+    assert np.array_equal(np.roll(visited, -shift), order)
+    _, best = optimal_heads(problem, order)
+    assert problem.tour_cost(t) == pytest.approx(best, rel=1e-12)
+    assert kernels.tour_cost(t, edge, node) == pytest.approx(best, rel=1e-12)
