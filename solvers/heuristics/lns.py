@@ -256,9 +256,9 @@ class _Search:
                     best, best_cost = base.copy(), base_cost
             cur, trial_best = base.copy(), base.copy()
             mean_edge = float(np.mean(p.edge_costs(cur, np.roll(cur, -1)))) * heat
-            settings = np.array([iterations, patience, s.hottest * mean_edge,
-                                 s.end_temperature * mean_edge, self.max_remove, s.noise * mean_edge,
-                                 s.reaction, s.reopt_window_for(n)], dtype=np.float64)
+            settings = kernels.trial_settings(iterations, patience, s.hottest * mean_edge,
+                                              s.end_temperature * mean_edge, self.max_remove,
+                                              s.noise * mean_edge, s.reaction, s.reopt_window_for(n))
             costs = np.array([base_cost, best_cost, base_cost])
             counts = np.array([0, 0, done, best_at], dtype=np.int64)
             while True:

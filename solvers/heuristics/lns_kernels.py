@@ -256,6 +256,14 @@ def _roulette(w: np.ndarray) -> int:
     return len(w) - 1
 
 
+def trial_settings(iterations: int, patience: int, start_temperature: float, end_temperature: float,
+                   max_remove: int, noise: float, reaction: float, window: int) -> np.ndarray:
+    """The ``settings`` array of :func:`run_trial`, in its order (temperatures and noise in cost
+    units; ``window``: the re-opt window's half-width, 0 for the full re-opt)."""
+    return np.array([iterations, patience, start_temperature, end_temperature, max_remove, noise,
+                     reaction, window], dtype=np.float64)
+
+
 @njit(cache=True)
 def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: np.ndarray,
               counts: np.ndarray, weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray,

@@ -64,8 +64,9 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     if iterations <= 0 or k < 5:
         return t
     mean_edge = cost / k
-    settings = np.array([iterations, iterations, mean_edge, 0.003 * mean_edge, min(25, math.ceil(0.3 * k)),
-                         0.1 * mean_edge, 0.1, 4 if k > large else 0], dtype=np.float64)
+    settings = kernels.trial_settings(iterations, iterations, mean_edge, 0.003 * mean_edge,
+                                      min(25, math.ceil(0.3 * k)), 0.1 * mean_edge, 0.1,
+                                      4 if k > large else 0)
     cur, best, trial_best = t.copy(), t.copy(), t.copy()
     costs_now = np.array([cost, cost, cost])
     counts = np.zeros(4, dtype=np.int64)
