@@ -7,13 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.io import read_instance
+from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
 
 from .conftest import GTSPLIB
@@ -173,6 +175,8 @@ def test_operators_are_all_used():
     ({"fit_trials": 0}, "fit_trials must be an integer >= 1"),
     ({"macro": 1}, "macro must be true or false"),
     ({"macro_iterations": -1}, "macro_iterations must be an integer >= 0"),
+    ({"starts": 0}, "starts must be an integer >= 1"),
+    ({"start_iterations": 0}, "start_iterations must be an integer >= 1"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -309,3 +313,70 @@ def test_macro_starts_large_cycles_elsewhere():
     assert runs[0].order != runs[1].order
     default, off = ((r.order, r.heads, r.objective) for r in runs[1:])
     assert default == off
+
+
+def test_no_race_by_default():
+    """One start unless asked: starts=1 is the default run, below and above LARGE clusters."""
+    assert LnsSettings().starts_for(LARGE + 1) == 1 == LnsSettings().starts_for(10)
+    for n, options in ((12, {}), (LARGE + 20, {"iterations": 200, "trials": 1})):
+        inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+        runs = [run_solver(get_solver("lns", **given, **options, **CONVERGE), inst, 0.5, seed=1)
+                for given in ({}, {"starts": 1})]
+        assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4])
+def test_race_on_very_small_instances(k):
+    """A race asked for on 1-4 clusters still returns a valid tour (up to 3 clusters no race)."""
+    inst = generate_instance(k, 3, seed=k)
+    r = run_solver(get_solver("lns", starts=3, **CONVERGE), inst, 0.5, seed=1)
+    assert sorted(r.order) == list(range(k))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+
+
+def test_race_kinds():
+    """The race takes greedy, then macro (planar costs only), then random-insertion tours."""
+    planar = _Search(price(generate_instance(12, 2, seed=1), 0.5), LnsSettings(starts=4),
+                     np.random.default_rng(0))
+    assert planar.start_kinds() == ["greedy", "macro", "random", "random"]
+    assert _Search(price(generate_instance(12, 2, seed=1), 0.5), LnsSettings(starts=2),
+                   np.random.default_rng(0)).start_kinds() == ["greedy", "macro"]
+    explicit = _Search(price(_asymmetric(9, 1), None), LnsSettings(starts=3), np.random.default_rng(0))
+    assert explicit.start_kinds() == ["greedy", "random", "random"]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_raced_starts_never_below_dp_optimum(seed):
+    """Three raced starts on K = 12 (and on directed costs): valid tours, never below the DP's
+    proven optimum, priced as the evaluator prices them; the race's iterations are counted."""
+    inst = generate_instance(12, 3, seed=40 + seed)
+    optimum = run_solver("dp", inst, 0.5).objective
+    r = run_solver(get_solver("lns", starts=3, start_iterations=20, **CONVERGE), inst, 0.5, seed=seed)
+    assert sorted(r.order) == list(range(12))
+    assert r.objective >= optimum - 1e-9 * optimum
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert r.stats["iterations"] > 3 * max(100, 20 * price(inst, 0.5).n_clusters)
+    directed = _asymmetric(9, seed)
+    d_opt = run_solver("dp", directed, None).objective
+    d = run_solver(get_solver("lns", starts=2, **CONVERGE), directed, None, seed=seed)
+    assert d.objective >= d_opt - 1e-9 * d_opt
+
+
+def test_race_keeps_the_cheapest_start():
+    """Above LARGE clusters the race's answer is the cheapest of its starts' short trials: each
+    raced start alone (same kernel seed) ends no cheaper than the race of all three."""
+    n = LARGE + 20
+    problem = price(generate_instance(n, 2, seed=5, zeta=10.0, area=4000.0), 0.5)
+    search = _Search(problem, LnsSettings(starts=3, start_iterations=1), np.random.default_rng(0))
+    kernels.seed(9)
+    tour, cost, _, _, done = search.race(search.start_kinds(), None)
+    assert done == 3 * max(100, problem.n_clusters)
+    assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
+    assert cost == pytest.approx(problem.tour_cost(tour), rel=1e-9)
+    alone = []
+    for kind in ("greedy", "macro", "random"):
+        kernels.seed(9)
+        for earlier in ("greedy", "macro", "random")[: ("greedy", "macro", "random").index(kind)]:
+            search.race([earlier], None)  # the same random numbers as in the race
+        alone.append(search.race([kind], None)[1])
+    assert cost == min(alone)

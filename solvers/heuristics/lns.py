@@ -18,7 +18,8 @@ simulated-annealing acceptance, the temperature cooling geometrically over a tri
 after ``iterations`` iterations or ``patience`` without a new trial best (by default only with
 ``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
 hotter start); the first trial starts from the greedy tour (or on planar instances, with ``macro``, the
-macro tour) improved by the local search, later ones
+macro tour) improved by the local search (with ``starts``, from the best of several first tours
+after a short trial each), later ones
 from the best tour so far, and a trial that did not improve it makes the next one hotter
 (temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
 its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
@@ -70,6 +71,8 @@ LARGE = 400
 FIT_FLOOR = 10
 #: Seconds between two looks at the clock (the compiled trial runs in chunks about this long).
 CHUNK_SECONDS = 0.01
+#: Iterations of a raced start's short trial between two looks at the clock.
+RACE_CHUNK = 200
 
 
 @dataclass(frozen=True)
@@ -95,6 +98,8 @@ class LnsSettings:
     quadrants: bool | None = None
     macro: bool = False
     macro_iterations: int = 5
+    starts: int | None = None
+    start_iterations: int = 5
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -129,6 +134,9 @@ class LnsSettings:
             check_bool("quadrants", self.quadrants)
         check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
+        if self.starts is not None:
+            check_int("starts", self.starts, 1)
+        check_int("start_iterations", self.start_iterations, 1)
 
     @property
     def hottest(self) -> float:
@@ -171,6 +179,11 @@ class LnsSettings:
             return self.reopt_window
         return 0 if n <= LARGE else 4
 
+    def starts_for(self, n: int) -> int:
+        """First tours raced for ``n`` clusters (default 1: no race, the first trial starts from
+        the greedy or, with ``macro``, the macro tour)."""
+        return self.starts if self.starts is not None else 1
+
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
         ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
@@ -197,7 +210,8 @@ class _Search:
         self.symmetric = bool(problem.symmetric)
         n = problem.n_clusters
         count = settings.neighbours_for(n, self.symmetric)
-        points = points_of(problem) if settings.quadrants_for(n) or settings.macro else None
+        wants = settings.quadrants_for(n) or settings.macro or settings.starts_for(n) > 1
+        points = points_of(problem) if wants else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
         if points is None or not settings.quadrants_for(n):
@@ -214,36 +228,93 @@ class _Search:
                                     np.ones(self.p.n_clusters, dtype=np.bool_), self.symmetric)
         return t, cost
 
-    def first_tour(self, deadline: float | None) -> np.ndarray:
-        """The first trial's start before the local search: the macro tour on a planar instance
-        where ``macro`` asks for it (:mod:`gtsp_bench.solvers.heuristics.lns_macro`), else the
-        greedy tour."""
+    def start_tour(self, kind: str, deadline: float | None) -> np.ndarray:
+        """A first tour before the local search: ``"macro"``, the macro tour on a planar instance
+        (:mod:`gtsp_bench.solvers.heuristics.lns_macro`; elsewhere the greedy tour); ``"random"``,
+        a random-insertion tour (the cold restarts' start); else the greedy tour."""
         n = self.p.n_clusters
-        if self.centre is None or not self.s.macro or n < 5:
+        if kind == "random":
+            return kernels.random_insertion_tour(self.edge, self.node, self.start, self.near,
+                                                 self.cluster_of)
+        if kind != "macro" or self.centre is None or n < 5:
             return greedy_tour(self.p, anchor_node(self.p))
         order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
+
+    def start_kinds(self) -> list[str]:
+        """The first tours to race (:meth:`race`): the first ``starts`` of greedy, macro (planar
+        instances only), then random-insertion tours."""
+        kinds = ["greedy"] + (["macro"] if self.centre is not None else [])
+        count = self.s.starts_for(self.p.n_clusters)
+        return (kinds + ["random"] * count)[:count]
+
+    def trial_settings(self, cur: np.ndarray, heat: float, iterations: int,
+                       patience: int) -> np.ndarray:
+        """:func:`run_trial`'s settings for a trial from ``cur``: temperatures and noise scaled by
+        the mean edge of ``cur`` times ``heat``."""
+        s = self.s
+        mean_edge = float(np.mean(self.p.edge_costs(cur, np.roll(cur, -1)))) * heat
+        return kernels.trial_settings(iterations, patience, s.hottest * mean_edge,
+                                      s.end_temperature * mean_edge, self.max_remove,
+                                      s.noise * mean_edge, s.reaction,
+                                      s.reopt_window_for(self.p.n_clusters))
+
+    def race(self, kinds: list[str], deadline: float | None
+             ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, int]:
+        """Each first tour of ``kinds`` improved by the local search, then one short trial from it
+        (``start_iterations`` per cluster, annealed over the usual temperatures); returns the
+        cheapest trial's best tour, its cost, that trial's operator weights and the iterations
+        done. A deadline that passes ends the race (after at least the first start's local
+        search)."""
+        length = max(100, self.s.start_iterations * self.p.n_clusters)
+        won: tuple[np.ndarray, float, np.ndarray, np.ndarray] | None = None
+        done = 0
+        for kind in kinds:
+            if won is not None and is_past(deadline):
+                break
+            t, cost = self.local_search(self.start_tour(kind, deadline))
+            settings = self.trial_settings(t, 1.0, length, length)
+            cur, best, trial_best = t.copy(), t.copy(), t.copy()
+            costs = np.array([cost, cost, cost])
+            counts = np.zeros(4, dtype=np.int64)
+            weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
+            while not kernels.run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i,
+                                        settings, RACE_CHUNK, self.edge, self.node, self.start,
+                                        self.near, self.cluster_of, self.symmetric):
+                if is_past(deadline):
+                    break
+            done += int(counts[2])
+            if won is None or costs[1] < won[1] - REL_TOL * abs(won[1]):
+                won = (best.copy(), float(costs[1]), weights_r, weights_i)
+        assert won is not None
+        return (*won, done)
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
         """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
         stats, whether the deadline came before convergence)."""
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
-        best, best_cost = self.local_search(self.first_tour(deadline))
+        clock0 = time.perf_counter()
+        weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
+        kinds, done = self.start_kinds(), 0
+        if len(kinds) > 1 and p.n_clusters >= 4:  # up to 3 clusters the re-opt solves it
+            best, best_cost, weights_r, weights_i, done = self.race(kinds, deadline)
+        else:
+            best, best_cost = self.local_search(self.start_tour("macro" if s.macro else "greedy",
+                                                                deadline))
+            clock0 = time.perf_counter()
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
         floor = FIT_FLOOR * n if n <= LARGE else iterations  # a fitted trial's least length
-        done = best_at = trials = 0
+        best_at, trials = done, 0
         # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
         converged = exact = n < 4
         timed_out = False
-        weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         steps, heat = 1, 1.0
         # Trials restart from the base: the best tour, or after a cold restart that run's best.
         base, base_cost, fails = best.copy(), best_cost, 0
         cold = s.restart_after > 0 and not s.stop_at_convergence and deadline is not None
         fit = s.fit_to_time and not s.stop_at_convergence and deadline is not None
-        clock0 = time.perf_counter()
         while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
                 timed_out = True
@@ -255,10 +326,7 @@ class _Search:
                 if base_cost < best_cost - REL_TOL * abs(best_cost):
                     best, best_cost = base.copy(), base_cost
             cur, trial_best = base.copy(), base.copy()
-            mean_edge = float(np.mean(p.edge_costs(cur, np.roll(cur, -1)))) * heat
-            settings = kernels.trial_settings(iterations, patience, s.hottest * mean_edge,
-                                              s.end_temperature * mean_edge, self.max_remove,
-                                              s.noise * mean_edge, s.reaction, s.reopt_window_for(n))
+            settings = self.trial_settings(cur, heat, iterations, patience)
             costs = np.array([base_cost, best_cost, base_cost])
             counts = np.array([0, 0, done, best_at], dtype=np.int64)
             while True:
@@ -379,6 +447,14 @@ class Lns:
     macro_iterations
         Iterations per cluster of the centre tour's annealing trial (>= 0; 0: random insertion and
         local search only).
+    starts
+        First tours raced (>= 1; default 1, no race): the first ``starts`` of the greedy tour,
+        the macro tour (planar instances) and random-insertion tours, each improved by the local
+        search and then by one short trial (``start_iterations`` per cluster, annealed over the
+        usual temperatures); the usual trials start from the best of those trials. With a race
+        ``macro`` has no effect.
+    start_iterations
+        Iterations per cluster of each raced start's trial (>= 1, at least 100 in all).
     """
 
     asymmetric = True
@@ -390,13 +466,13 @@ class Lns:
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
-        macro_iterations: int = 5,
+        macro_iterations: int = 5, starts: int | None = None, start_iterations: int = 5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
-                                    macro_iterations)
+                                    macro_iterations, starts, start_iterations)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
