@@ -98,7 +98,7 @@ class LnsSettings:
     quadrants: bool | None = None
     macro: bool = False
     macro_iterations: int = 5
-    starts: int | None = None
+    starts: int = 1
     start_iterations: int = 5
 
     def __post_init__(self) -> None:
@@ -134,8 +134,7 @@ class LnsSettings:
             check_bool("quadrants", self.quadrants)
         check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
-        if self.starts is not None:
-            check_int("starts", self.starts, 1)
+        check_int("starts", self.starts, 1)
         check_int("start_iterations", self.start_iterations, 1)
 
     @property
@@ -179,11 +178,6 @@ class LnsSettings:
             return self.reopt_window
         return 0 if n <= LARGE else 4
 
-    def starts_for(self, n: int) -> int:
-        """First tours raced for ``n`` clusters (default 1: no race, the first trial starts from
-        the greedy or, with ``macro``, the macro tour)."""
-        return self.starts if self.starts is not None else 1
-
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
         ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
@@ -210,7 +204,7 @@ class _Search:
         self.symmetric = bool(problem.symmetric)
         n = problem.n_clusters
         count = settings.neighbours_for(n, self.symmetric)
-        wants = settings.quadrants_for(n) or settings.macro or settings.starts_for(n) > 1
+        wants = settings.quadrants_for(n) or settings.macro or settings.starts > 1
         points = points_of(problem) if wants else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
@@ -245,7 +239,7 @@ class _Search:
         """The first tours to race (:meth:`race`): the first ``starts`` of greedy, macro (planar
         instances only), then random-insertion tours."""
         kinds = ["greedy"] + (["macro"] if self.centre is not None else [])
-        count = self.s.starts_for(self.p.n_clusters)
+        count = self.s.starts
         return (kinds + ["random"] * count)[:count]
 
     def trial_settings(self, cur: np.ndarray, heat: float, iterations: int,
@@ -466,7 +460,7 @@ class Lns:
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
-        macro_iterations: int = 5, starts: int | None = None, start_iterations: int = 5,
+        macro_iterations: int = 5, starts: int = 1, start_iterations: int = 5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
