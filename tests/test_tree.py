@@ -1,18 +1,11 @@
-"""The open nodes of the branch and cut: column codes padded to the LP, the heap order."""
+"""The open nodes of the branch and cut: the heap order."""
 
 from __future__ import annotations
 
 import heapq
 
 import numpy as np
-from gtsp_bench.solvers.exact.mip.tree import Node, padded
-
-
-def test_columns_added_since_a_node_are_free_in_it():
-    fixes = np.array([1, -1, 0], dtype=np.int8)
-    assert padded(fixes, 3) is fixes
-    np.testing.assert_array_equal(padded(fixes, 5), [1, -1, 0, -1, -1])
-    assert padded(fixes, 5).dtype == np.int8
+from gtsp_bench.solvers.exact.mip.tree import Node
 
 
 def test_nodes_come_off_the_heap_by_bound_then_creation():

@@ -62,6 +62,9 @@ Modules, each importing only the ones above it:
   Gurobi backends (highspy and gurobipy are imported when a backend is built, never on import);
 * :mod:`~gtsp_bench.solvers.exact.mip.branching`: pseudo-costs and reliability branching
   (:class:`PseudoCosts`, :func:`choose`), independent of the backend;
+* :mod:`~gtsp_bench.solvers.exact.mip.tree`: the open nodes (column fixes per model column);
+* :mod:`~gtsp_bench.solvers.exact.mip.columns`: columns leaving the node LPs once their reduced
+  cost has stayed large, and the column bounds that move the LP from one node to another;
 * :mod:`~gtsp_bench.solvers.exact.mip.branch_cut`: the search (root loop, own branch and cut,
   the backend's lazy MILP), :func:`solve_exact` and :class:`MipSolver`, the base of the ``milp``
   and ``gurobi`` solvers (:mod:`gtsp_bench.solvers.exact.milp`,

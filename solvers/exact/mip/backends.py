@@ -171,6 +171,7 @@ class LpModel:
         self.cols = np.zeros(0, dtype=np.int64)
         self.cuts = Cuts.empty(model.n_nodes)
         self.slack_age = np.zeros(0, dtype=np.int64)
+        self.col_age = np.zeros(0, dtype=np.int64)  # LPs with a large reduced cost (columns.py)
         base, rhs = model.base_rows(np.zeros(0, dtype=np.int64))
         backend.add_rows(base.tocsr(), rhs, rhs)
         self.add_cols(cols)
@@ -181,6 +182,7 @@ class LpModel:
         cut_part = self.cuts.sparse(self.model, cols)
         self.backend.add_cols(self.model.cost[cols], sp.vstack([base, cut_part], format="csc"))
         self.cols = np.concatenate([self.cols, cols])
+        self.col_age = np.concatenate([self.col_age, np.zeros(len(cols), dtype=np.int64)])
 
     def add_cuts(self, cuts: Cuts) -> None:
         """Add cut rows over the columns present (each side in its sparser form over them)."""
@@ -205,6 +207,7 @@ class LpModel:
         if len(positions):
             self.backend.delete_cols(positions)
             self.cols = np.delete(self.cols, positions)
+            self.col_age = np.delete(self.col_age, positions)
 
     def fix_zero(self, positions: np.ndarray) -> None:
         """Fix backend columns to 0."""

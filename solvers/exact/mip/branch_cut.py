@@ -18,13 +18,13 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from gtsp_bench.solvers.exact.mip import branching, flow
+from gtsp_bench.solvers.exact.mip import branching, columns, flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
-from gtsp_bench.solvers.exact.mip.tree import Node, padded
+from gtsp_bench.solvers.exact.mip.tree import Node
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
 from gtsp_bench.solvers.heads import optimal_heads
@@ -146,6 +146,8 @@ class _Search:
         self.margin = 1e-9 * max(1.0, abs(self.ub))  # against rounding in the LP's duals
         self.lp = LpModel(model, backend, core_columns(model, options.core_edges, tour))
         self.fixed = np.zeros(model.n_cols, dtype=bool)
+        self.codes = np.full(model.n_cols, -1, dtype=np.int8)  # the node in the LP, per model column
+        self.pinned = np.zeros(model.n_cols, dtype=bool)  # branched on: never dropped
         self.pseudo = PseudoCosts(model.n_cols)
 
     # -------------------------------------------------------------- helpers
@@ -237,8 +239,8 @@ class _Search:
         return paused
 
     def absent(self) -> np.ndarray:
-        """Model columns neither in the LP nor fixed to 0."""
-        absent = ~self.fixed
+        """Model columns neither in the LP nor fixed to 0 (for the search or at the node)."""
+        absent = ~self.fixed & (self.codes != 0)
         absent[self.lp.cols] = False
         return np.flatnonzero(absent)
 
@@ -276,54 +278,50 @@ class _Search:
         reduced cost is negative (a node is pruned on its Lagrangian bound before that). It
         fixes columns by reduced cost for its subtree and branches by :meth:`_branching` (strong
         branching among the fractional ``y`` closest to 1/2, else such ``x``). Cuts are
-        global; slack ones are purged. A node taken from the open ones after a jump in the tree
-        (:data:`JUMP_BOUNDS`) has its first LP solved from no basis by the interior point method.
+        global; slack ones are purged, and so are columns priced out for long (:mod:`columns`).
+        A node taken from the open ones after a jump in the tree (:data:`JUMP_BOUNDS`) has its
+        first LP solved from no basis by the interior point method.
         """
         lp = self.lp
         heap: list[Node] = []
-        free = np.full(len(lp.cols), -1, dtype=np.int8)
-        node: Node | None = Node(self.lb, 0, free)
-        applied = free
+        node: Node | None = Node(self.lb, 0, self.codes)
         seq = explored = 0
         popped = False  # whether ``node`` came from the heap (a jump), not a dive or the same node
         while node is not None and not self.proven and self.left() > 0:
             if node.bound <= self.ub - self.gap:
-                # move the LP's bounds here (columns priced in later are free in older nodes)
-                fixes, applied = padded(node.fixes, len(lp.cols)), padded(applied, len(lp.cols))
-                change = np.flatnonzero(fixes != applied)
+                # move the LP's bounds here (codes per model column; absent columns need none)
+                change, lower, upper = columns.bound_moves(node.fixes, self.codes, lp.cols, self.fixed)
                 if len(change):
-                    code = fixes[change]
-                    upper0 = np.where(self.fixed[lp.cols[change]], 0.0, 1.0)
-                    lp.backend.set_bounds(change, np.maximum(code, 0).astype(float),
-                                          np.where(code < 0, upper0, code).astype(float))
+                    lp.backend.set_bounds(change, lower, upper)
                 if popped and len(change) > JUMP_BOUNDS:  # a jump: the last basis is far away
                     lp.backend.start_cold()
                     self.stats["jumps"] = self.stats.get("jumps", 0) + 1
-                applied = fixes
+                self.codes = node.fixes
                 explored += 1
                 outcome = self._node_loop(node.branched)
                 if outcome == "stopped":
                     heapq.heappush(heap, node)
                     break
                 if isinstance(outcome, tuple) and len(outcome) == 2:  # the same node, one more fix
-                    fixes = padded(applied, len(lp.cols)).copy()
-                    fixes[outcome[0]] = int(outcome[1])
+                    fixes, key = self.codes.copy(), int(lp.cols[outcome[0]])
+                    fixes[key], self.pinned[key] = int(outcome[1]), True
                     node = Node(node.bound, node.seq, fixes)
                     continue
                 node = None
                 if isinstance(outcome, tuple) and len(outcome) == 5:
                     bound, col, value, frac, fix = outcome
-                    base = padded(applied, len(lp.cols))
-                    base[fix] = 0
+                    base = self.codes.copy()
+                    base[lp.cols[fix]] = 0
                     first, second = (1, 0) if value >= 0.5 else (0, 1)  # dive into ``value``
                     children = []
+                    key = int(lp.cols[col])
+                    self.pinned[key] = True
                     for v in (first, second):
                         child = base.copy()
-                        child[col] = v
+                        child[key] = v
                         children.append(child)
                     seq += 2
                     best_other = heap[0].bound if heap else bound
-                    key = int(lp.cols[col])
                     heapq.heappush(heap, Node(bound, seq, children[1], (key, second == 1, frac, bound)))
                     node = Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
                     if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
@@ -394,6 +392,8 @@ class _Search:
                 if only:  # the other child is empty: fix the column here and go on
                     return col, value
                 return res.objective, col, value, float(res.values[col]), fix
+            dropped = columns.drop_stale(lp, res.reduced_costs, self.ub - res.objective, self.pinned)
+            self.stats["cols_dropped"] = self.stats.get("cols_dropped", 0) + dropped
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"

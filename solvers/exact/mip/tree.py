@@ -1,7 +1,7 @@
 """The open nodes of the branch and cut: their bound, column fixes and the branching that made them.
 
-A node's column fixes are per backend column (-1 free, else the value the column is fixed to);
-columns priced into the LP after the node was made are free in it (:func:`padded`).
+A node's column fixes are per model column (-1 free, else the value the column is fixed to), so
+that columns leaving and joining the LP leave them unchanged.
 """
 
 from __future__ import annotations
@@ -9,13 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-
-
-def padded(fixes: np.ndarray, n: int) -> np.ndarray:
-    """Node column codes for ``n`` columns: columns added since the node was made are free."""
-    if len(fixes) == n:
-        return fixes
-    return np.concatenate([fixes, np.full(n - len(fixes), -1, dtype=np.int8)])
 
 
 @dataclass(order=True)
@@ -29,7 +22,7 @@ class Node:
     seq
         Creation order (ties).
     fixes
-        Per backend column, -1 (free) or the value it is fixed to.
+        Per model column, -1 (free) or the value it is fixed to.
     branched
         The branching that made it (model column, up, the column's LP value and the LP bound in
         the parent), for the pseudo-costs.

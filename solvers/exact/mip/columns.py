@@ -1,0 +1,122 @@
+"""Columns leaving the branch and cut's LP: those whose reduced cost has stayed large.
+
+Columns priced into the LP stayed there for the rest of the search (only those fixed to 0 by
+reduced cost for the whole search left it), so every LP grew with the search. A column whose
+reduced cost has been above :data:`DROP_SHARE` of the node's gap (incumbent minus LP value) for
+:data:`DROP_AGE` rounds of a node's cut loop in a row (ages go on across nodes) leaves the LP.
+Nothing is lost: the search prices every column absent from the LP (and not fixed to 0 at the
+node) at every node LP before it uses the LP's value as a bound, so a dropped column comes back
+as soon as its reduced cost is negative. Columns that have been branched on are never dropped (a
+node fixing one must find it in the LP). A column's reduced cost is positive only while it is
+nonbasic at 0, so dropping it leaves the LP's basis valid.
+
+The nodes' column codes (-1 free, else the value a column is fixed to) are kept per model column,
+so that dropping and adding LP columns leaves every open node's fixes unchanged.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from gtsp_bench.solvers.exact.mip.backends import LpModel
+
+#: Rounds of the node cut loop in a row with a large reduced cost after which a column leaves the
+#: LP (0: never). UAV K = 50, omega 0.9: node LPs of a median 5,400 columns instead of 7,600.
+DROP_AGE = 3
+#: A reduced cost counts as large above this share of the node's gap (incumbent minus LP value).
+DROP_SHARE = 1.0
+
+
+def age_columns(age: np.ndarray, reduced_costs: np.ndarray, gap: float) -> np.ndarray:
+    """The LP columns' new ages: one more where the reduced cost is large, else 0.
+
+    Parameters
+    ----------
+    age
+        Per LP column, the LPs in a row it has had a large reduced cost.
+    reduced_costs
+        Per LP column, its reduced cost at the LP just solved.
+    gap
+        The incumbent's value minus the LP's (at least 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        The new ages.
+    """
+    large = reduced_costs > DROP_SHARE * max(gap, 0.0)
+    return np.where(large & (reduced_costs > 0), age + 1, 0)
+
+
+def stale_columns(age: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """LP columns (positions) that leave the LP: aged :data:`DROP_AGE` or more and not kept.
+
+    Parameters
+    ----------
+    age
+        Per LP column, from :func:`age_columns`.
+    keep
+        Per LP column, whether it must stay (branched on).
+
+    Returns
+    -------
+    numpy.ndarray
+        Their positions, increasing (none when :data:`DROP_AGE` is 0).
+    """
+    if DROP_AGE <= 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.flatnonzero((age >= DROP_AGE) & ~keep)
+
+
+def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, pinned: np.ndarray) -> int:
+    """Age the LP's columns by the node LP just solved and drop the stale ones.
+
+    Parameters
+    ----------
+    lp
+        The model in the backend, its basis that of the LP just solved.
+    reduced_costs
+        Per LP column, its reduced cost at that LP.
+    gap
+        The incumbent's value minus the LP's.
+    pinned
+        Per model column, whether it must stay in the LP (branched on).
+
+    Returns
+    -------
+    int
+        How many columns left the LP.
+    """
+    lp.col_age = age_columns(lp.col_age, reduced_costs, gap)
+    stale = stale_columns(lp.col_age, pinned[lp.cols])
+    lp.drop_cols(stale)
+    return len(stale)
+
+
+def bound_moves(target: np.ndarray, applied: np.ndarray, cols: np.ndarray, fixed: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The LP column bounds to change to go from one node's codes to another's.
+
+    Parameters
+    ----------
+    target, applied
+        Per model column, the codes of the node to go to and of the node in the LP (-1 free,
+        else the value the column is fixed to).
+    cols
+        The model column of each LP column.
+    fixed
+        Per model column, whether it is fixed to 0 for the whole search (then its upper bound
+        when free is 0).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        LP column positions whose code differs, and their new lower and upper bounds.
+    """
+    change = np.flatnonzero(target[cols] != applied[cols])
+    code = target[cols[change]]
+    upper0 = np.where(fixed[cols[change]], 0.0, 1.0)
+    return change, np.maximum(code, 0).astype(float), np.where(code < 0, upper0, code).astype(float)
