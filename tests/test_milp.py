@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.milp import Milp
+from gtsp_bench.solvers.exact.mip import columns
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -93,8 +94,6 @@ def test_strong_branching_and_restarts_prove_the_optimum(monkeypatch):
     """14st70 with one root round and the greedy tour as first incumbent: the root does not
     prove it, so LNS restarts improve the incumbent and the branch and cut (strong branching)
     proves the literature optimum (no columns dropped: with them its first node proves it)."""
-    from gtsp_bench.solvers.exact.mip import columns
-
     monkeypatch.setattr(columns, "DROP_AGE", 0)
     r = run_solver(Milp(root_rounds=1, lns_trials=0), read_instance(GTSPLIB / "14st70.gtsp.gz"), None)
     assert r.status == "optimal"
