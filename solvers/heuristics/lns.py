@@ -239,8 +239,7 @@ class _Search:
         """The first tours to race (:meth:`race`): the first ``starts`` of greedy, macro (planar
         instances only), then random-insertion tours."""
         kinds = ["greedy"] + (["macro"] if self.centre is not None else [])
-        count = self.s.starts
-        return (kinds + ["random"] * count)[:count]
+        return (kinds + ["random"] * self.s.starts)[: self.s.starts]
 
     def trial_settings(self, cur: np.ndarray, heat: float, iterations: int,
                        patience: int) -> np.ndarray:
@@ -267,19 +266,12 @@ class _Search:
             if won is not None and is_past(deadline):
                 break
             t, cost = self.local_search(self.start_tour(kind, deadline))
-            settings = self.trial_settings(t, 1.0, length, length)
-            cur, best, trial_best = t.copy(), t.copy(), t.copy()
-            costs = np.array([cost, cost, cost])
-            counts = np.zeros(4, dtype=np.int64)
-            weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
-            while not kernels.run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i,
-                                        settings, RACE_CHUNK, self.edge, self.node, self.start,
-                                        self.near, self.cluster_of, self.symmetric):
-                if is_past(deadline):
-                    break
-            done += int(counts[2])
-            if won is None or costs[1] < won[1] - REL_TOL * abs(won[1]):
-                won = (best.copy(), float(costs[1]), weights_r, weights_i)
+            best, best_cost, weights_r, weights_i, count = kernels.one_trial(
+                t, cost, self.trial_settings(t, 1.0, length, length), RACE_CHUNK, self.edge,
+                self.node, self.start, self.near, self.cluster_of, self.symmetric, deadline)
+            done += count
+            if won is None or best_cost < won[1] - REL_TOL * abs(won[1]):
+                won = (best, best_cost, weights_r, weights_i)
         assert won is not None
         return (*won, done)
 
@@ -314,8 +306,7 @@ class _Search:
                 timed_out = True
                 break
             if cold and fails >= s.restart_after:
-                base, base_cost = self.local_search(kernels.random_insertion_tour(
-                    self.edge, self.node, self.start, self.near, self.cluster_of))
+                base, base_cost = self.local_search(self.start_tour("random", deadline))
                 heat, fails = 1.0, 0
                 if base_cost < best_cost - REL_TOL * abs(best_cost):
                     best, best_cost = base.copy(), base_cost

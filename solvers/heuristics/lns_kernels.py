@@ -25,6 +25,7 @@ from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported
     two_opt,
 )
 from gtsp_bench.solvers.heuristics.lns_window import local_search_window, remove_near, runs_cost
+from gtsp_bench.solvers.heuristics.local_search import is_past
 from numba import njit
 
 #: Removal operators, by index.
@@ -254,6 +255,30 @@ def _roulette(w: np.ndarray) -> int:
         if x < 0.0:
             return i
     return len(w) - 1
+
+
+def one_trial(t: np.ndarray, cost: float, settings: np.ndarray, chunk: int, edge: np.ndarray,
+              node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
+              symmetric: bool, deadline: float | None
+              ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, int]:
+    """One :func:`run_trial` from tour ``t`` (of cost ``cost``) with fresh operator weights, run in
+    chunks of ``chunk`` iterations until it ends or ``deadline`` passes (a look after each chunk).
+
+    Returns
+    -------
+    tuple
+        The trial's best tour and its cost, the removal and insertion weights it ended with, and
+        the iterations done.
+    """
+    cur, best, trial_best = t.copy(), t.copy(), t.copy()
+    costs = np.array([cost, cost, cost])
+    counts = np.zeros(4, dtype=np.int64)
+    weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
+    while not run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i, settings, chunk,
+                        edge, node, start, near, cluster_of, symmetric):
+        if is_past(deadline):
+            break
+    return best, float(costs[1]), weights_r, weights_i, int(counts[2])
 
 
 def trial_settings(iterations: int, patience: int, start_temperature: float, end_temperature: float,

@@ -21,7 +21,6 @@ import math
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.local_search import is_past
 
 #: The centre tour's neighbour lists: the 2 nearest centres in each quadrant and the nearest.
 CENTRE_NEIGHBOURS = 10
@@ -67,15 +66,8 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     settings = kernels.trial_settings(iterations, iterations, mean_edge, 0.003 * mean_edge,
                                       min(25, math.ceil(0.3 * k)), 0.1 * mean_edge, 0.1,
                                       4 if k > large else 0)
-    cur, best, trial_best = t.copy(), t.copy(), t.copy()
-    costs_now = np.array([cost, cost, cost])
-    counts = np.zeros(4, dtype=np.int64)
-    weights_r, weights_i = np.ones(len(kernels.REMOVALS)), np.ones(len(kernels.INSERTIONS))
-    while not kernels.run_trial(cur, best, trial_best, costs_now, counts, weights_r, weights_i, settings,
-                                CENTRE_CHUNK, costs, node, start, near, cluster_of, True):
-        if is_past(deadline):
-            break
-    return best
+    return kernels.one_trial(t, cost, settings, CENTRE_CHUNK, costs, node, start, near, cluster_of,
+                             True, deadline)[0]
 
 
 def macro_tour(order: np.ndarray, edge: np.ndarray | tuple, node: np.ndarray, start: np.ndarray,
