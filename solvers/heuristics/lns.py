@@ -26,7 +26,10 @@ its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an 
 windowed re-opt, sampled removals and reversing or-opt of
 :mod:`gtsp_bench.solvers.heuristics.lns_window`, and the neighbour lists take the nearest clusters of
 each quadrant (``quadrants``); on large planar instances the edge costs come from the coordinates
-(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`).
+(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, ``paths``
+and ``fail_passes`` (off by default) add sub-path re-solves of the best tour
+(:mod:`gtsp_bench.solvers.heuristics.lns_paths`): at the end of the budget, or after each trial
+that did not improve its start.
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -47,6 +50,7 @@ from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
 from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
+from gtsp_bench.solvers.heuristics.lns_paths import path_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -100,6 +104,10 @@ class LnsSettings:
     macro_iterations: int = 5
     starts: int = 1
     start_iterations: int = 5
+    paths: float = 0.0
+    path_clusters: int = 150
+    path_iterations: int = 5
+    fail_passes: int = 0
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -136,6 +144,10 @@ class LnsSettings:
         check_int("macro_iterations", self.macro_iterations, 0)
         check_int("starts", self.starts, 1)
         check_int("start_iterations", self.start_iterations, 1)
+        check_float("paths", self.paths, 0.0, 1.0, open_low=False)
+        check_int("path_clusters", self.path_clusters, 2)
+        check_int("path_iterations", self.path_iterations, 0)
+        check_int("fail_passes", self.fail_passes, 0)
 
     @property
     def hottest(self) -> float:
@@ -281,6 +293,9 @@ class _Search:
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
         clock0 = time.perf_counter()
+        final = deadline
+        if s.paths > 0.0 and deadline is not None and p.n_clusters > LARGE and self.symmetric:
+            deadline = clock0 + (1.0 - s.paths) * max(0.0, deadline - clock0)
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         kinds, done = self.start_kinds(), 0
         if len(kinds) > 1 and p.n_clusters >= 4:  # up to 3 clusters the re-opt solves it
@@ -293,6 +308,7 @@ class _Search:
         iterations, patience = s.iterations_for(n), s.patience_for(n)
         floor = FIT_FLOOR * n if n <= LARGE else iterations  # a fitted trial's least length
         best_at, trials = done, 0
+        windows, window_saving = 0, 0.0  # sub-path re-solves (paths, fail_passes)
         # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
         converged = exact = n < 4
         timed_out = False
@@ -352,11 +368,25 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
+                if s.fail_passes and n > LARGE and self.symmetric:  # re-solve the base's sub-paths
+                    saved, count = path_passes(p, base, s.path_clusters, s.path_iterations,
+                                               deadline, self.rng, s.fail_passes)
+                    windows, window_saving = windows + count, window_saving + saved
+                    if saved > 0.0:
+                        base_cost = p.tour_cost(base)
+                        if base_cost < best_cost - REL_TOL * abs(best_cost):
+                            best, best_cost = base.copy(), base_cost
             converged = converged or trials >= s.trials
         weights = dict(zip(REMOVALS, weights_r, strict=True))
         weights.update(zip(INSERTIONS, weights_i, strict=True))
         stats = {"iterations": done, "trials": trials, "best_at": best_at, "converged": converged,
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
+        if final is not deadline:  # the rest of the budget re-solves sub-paths of the best tour
+            saved, count = path_passes(p, best, s.path_clusters, s.path_iterations, final, self.rng)
+            windows, window_saving = windows + count, window_saving + saved
+            best_cost = p.tour_cost(best)
+        if windows:
+            stats.update(windows=windows, window_saving=round(window_saving, 6))
         return best, best_cost, stats, timed_out and not converged
 
 
@@ -440,6 +470,21 @@ class Lns:
         ``macro`` has no effect.
     start_iterations
         Iterations per cluster of each raced start's trial (>= 1, at least 100 in all).
+    paths
+        Share of the time limit, in [0, 1], kept for sub-path re-solves of the best tour at the
+        end (above ``LARGE`` clusters, symmetric costs, with a time limit; default 0: none): runs
+        of ``path_clusters`` consecutive clusters between their fixed neighbours, each re-solved
+        as a small GTSP by these kernels and put back when cheaper, half-overlapping windows from
+        random offsets until the limit (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
+    path_clusters
+        Clusters per sub-path (>= 2; default 150).
+    path_iterations
+        Iterations per cluster of a sub-path's annealing trial (>= 0; default 5; 0: its local
+        search only).
+    fail_passes
+        Above ``LARGE`` clusters on symmetric costs, after each trial that did not improve the
+        tour it started from, this many passes of sub-path re-solves (as ``paths``) over that
+        tour before the next trial (>= 0; default 0: none).
     """
 
     asymmetric = True
@@ -452,12 +497,15 @@ class Lns:
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, starts: int = 1, start_iterations: int = 5,
+        paths: float = 0.0, path_clusters: int = 150, path_iterations: int = 5,
+        fail_passes: int = 0,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
-                                    macro_iterations, starts, start_iterations)
+                                    macro_iterations, starts, start_iterations, paths,
+                                    path_clusters, path_iterations, fail_passes)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
