@@ -142,3 +142,25 @@ def test_full_strong_branching_takes_every_candidate(monkeypatch):
     for key in ("strong_lps", "bc_nodes", "node_lps"):
         assert capped.stats[key] == full.stats[key]
     assert capped.objective == pytest.approx(full.objective, rel=1e-12)
+
+
+@pytest.mark.parametrize("rule", ["ROOT_TAIL", "ROOT_FLAT_SHARE"])
+@pytest.mark.parametrize("seed", range(4))
+def test_a_root_that_tails_off_at_once_leaves_the_search_exact(seed, rule, monkeypatch):
+    """With a tail-off rule at its loosest (the second round without pricing, or the second round,
+    ends the root) the root ends in fewer rounds than by default, and the branch and cut still
+    proves dp's optimum."""
+    from gtsp_bench.solvers.exact.mip import branch_cut
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
+
+    from gtsp_bench.generator import generate_instance
+
+    inst = generate_instance(9, 5, seed=seed)
+    default = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(lns_trials=0))
+    monkeypatch.setattr(branch_cut, rule, 1e9)
+    monkeypatch.setattr(branch_cut, rule.replace("TAIL", "TAIL_ROUNDS").replace("SHARE", "ROUNDS"), 1)
+    r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(lns_trials=0))
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
+    assert r.lower_bound == pytest.approx(r.objective, rel=1e-9)
+    assert r.stats["root_rounds"] < default.stats["root_rounds"] and r.stats["bc_nodes"] >= 1

@@ -45,13 +45,14 @@ def test_bound_moves_change_only_the_lp_columns_whose_code_differs():
     assert len(change) == 0
 
 
+@pytest.mark.parametrize("share", [0.0, columns.DROP_SHARE])
 @pytest.mark.parametrize("seed", range(6))
-def test_dropping_every_priced_out_column_after_one_lp_keeps_the_search_exact(seed, monkeypatch):
-    """Columns with any positive reduced cost leave after one node LP (the most dropping there can
-    be): the branch and cut, left the work by one root round and the greedy tour, still proves
-    the dp optimum, and columns did leave."""
+def test_dropping_priced_out_columns_after_one_lp_keeps_the_search_exact(seed, share, monkeypatch):
+    """Columns leave after one node LP, with any positive reduced cost (share 0: the most dropping
+    there can be) or at the default share: the branch and cut, left the work by one root round
+    and the greedy tour, still proves the dp optimum, and columns did leave."""
     monkeypatch.setattr(columns, "DROP_AGE", 1)
-    monkeypatch.setattr(columns, "DROP_SHARE", 0.0)
+    monkeypatch.setattr(columns, "DROP_SHARE", share)
     inst = generate_instance(9, 5, seed=seed)
     r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(root_rounds=1, lns_trials=0))
     assert r.status == "optimal"

@@ -56,6 +56,12 @@ RESTART_SHARE = 0.05
 #: Share of the time limit after which an unfinished first root loop pauses for the restarts
 #: (then goes on): at K = 100 it would otherwise run to the limit with the first tour.
 ROOT_SHARE = 0.05
+#: The root loop ends (tails off) when its LP value rose by less than ``ROOT_TAIL`` of it over its
+#: last ``ROOT_TAIL_ROUNDS`` rounds without columns to price in.
+ROOT_TAIL, ROOT_TAIL_ROUNDS = 1e-5, 5
+#: Also when its bound rose by less than ``ROOT_FLAT_SHARE`` of the gap left over its last
+#: ``ROOT_FLAT_ROUNDS`` rounds, pricing or not (0 rounds: never; at UAV K = 50 most rounds price).
+ROOT_FLAT_SHARE, ROOT_FLAT_ROUNDS = 0.05, 0
 
 
 # ---------------------------------------------------------------------- the method
@@ -187,6 +193,7 @@ class _Search:
         paused at ``until`` (a ``time.perf_counter()`` time) before it finished."""
         model, lp = self.model, self.lp
         history: list[float] = []
+        bounds: list[float] = []
         rounds = 0
         paused = False
         while rounds < self.options.root_rounds and self.left() > 0:
@@ -209,7 +216,9 @@ class _Search:
             rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
             self.lb = max(self.lb, bound)
-            if self.proven or self.left() <= 0:
+            bounds.append(self.lb)
+            if self.proven or self.left() <= 0 or (0 < ROOT_FLAT_ROUNDS < len(bounds) and self.lb
+                    - bounds[-1 - ROOT_FLAT_ROUNDS] < ROOT_FLAT_SHARE * (self.ub - self.lb)):
                 break
             fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
             if fix.any():  # fixed columns leave the LP (their nonzeros slow every LP down)
@@ -220,7 +229,8 @@ class _Search:
                 lp.add_cols(price[np.argsort(rc[price])[:PRICE_PER_NODE * model.n_nodes]])
             else:
                 history.append(res.objective)
-                if len(history) > 5 and history[-1] - history[-6] < 1e-5 * max(1.0, abs(history[-1])):
+                last, k = history[-1], ROOT_TAIL_ROUNDS
+                if len(history) > k and last - history[-1 - k] < ROOT_TAIL * max(1.0, abs(last)):
                     break  # tailing off
             new = self.separate(values)
             if new is None:
