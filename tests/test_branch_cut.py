@@ -158,9 +158,31 @@ def test_a_root_that_tails_off_at_once_leaves_the_search_exact(seed, rule, monke
     inst = generate_instance(9, 5, seed=seed)
     default = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(lns_trials=0))
     monkeypatch.setattr(branch_cut, rule, 1e9)
+    monkeypatch.setattr(branch_cut, "ROOT_FLAT_AFTER", 0)
     monkeypatch.setattr(branch_cut, rule.replace("TAIL", "TAIL_ROUNDS").replace("SHARE", "ROUNDS"), 1)
     r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(lns_trials=0))
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
     assert r.lower_bound == pytest.approx(r.objective, rel=1e-9)
     assert r.stats["root_rounds"] < default.stats["root_rounds"] and r.stats["bc_nodes"] >= 1
+
+
+def test_the_flat_root_rule_waits_for_its_round(monkeypatch):
+    """The bound rule acts only from round ``ROOT_FLAT_AFTER`` on: with it at every round from the
+    first the root of a K = 9 instance ends sooner, with the default it runs as with the rule off."""
+    from gtsp_bench.solvers.exact.mip import branch_cut
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
+
+    from gtsp_bench.generator import generate_instance
+
+    problem = price(generate_instance(9, 5, seed=1), 0.5)
+    default = solve_exact(problem, HighsBackend, MipOptions(lns_trials=0))
+    monkeypatch.setattr(branch_cut, "ROOT_FLAT_ROUNDS", 0)
+    off = solve_exact(problem, HighsBackend, MipOptions(lns_trials=0))
+    monkeypatch.setattr(branch_cut, "ROOT_FLAT_ROUNDS", 1)
+    monkeypatch.setattr(branch_cut, "ROOT_FLAT_SHARE", 1e9)
+    monkeypatch.setattr(branch_cut, "ROOT_FLAT_AFTER", 0)
+    early = solve_exact(problem, HighsBackend, MipOptions(lns_trials=0))
+    assert default.stats["root_rounds"] == off.stats["root_rounds"] < branch_cut.ROOT_FLAT_AFTER
+    assert early.stats["root_rounds"] < off.stats["root_rounds"]
+    assert default.objective == off.objective == pytest.approx(early.objective, rel=1e-9)
