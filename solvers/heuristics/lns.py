@@ -293,8 +293,9 @@ class _Search:
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
         clock0 = time.perf_counter()
-        final = deadline
-        if s.paths > 0.0 and deadline is not None and p.n_clusters > LARGE and self.symmetric:
+        windowed = p.n_clusters > LARGE and self.symmetric  # sub-path re-solves apply
+        final, tail = deadline, windowed and s.paths > 0.0 and deadline is not None
+        if tail:  # the trials stop early; the rest of the budget re-solves sub-paths
             deadline = clock0 + (1.0 - s.paths) * max(0.0, deadline - clock0)
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         kinds, done = self.start_kinds(), 0
@@ -368,7 +369,7 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.fail_passes and n > LARGE and self.symmetric:  # re-solve the base's sub-paths
+                if s.fail_passes and windowed:  # re-solve the base's sub-paths
                     saved, count = path_passes(p, base, s.path_clusters, s.path_iterations,
                                                deadline, self.rng, s.fail_passes)
                     windows, window_saving = windows + count, window_saving + saved
@@ -381,7 +382,7 @@ class _Search:
         weights.update(zip(INSERTIONS, weights_i, strict=True))
         stats = {"iterations": done, "trials": trials, "best_at": best_at, "converged": converged,
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
-        if final is not deadline:  # the rest of the budget re-solves sub-paths of the best tour
+        if tail:  # the rest of the budget re-solves sub-paths of the best tour
             saved, count = path_passes(p, best, s.path_clusters, s.path_iterations, final, self.rng)
             windows, window_saving = windows + count, window_saving + saved
             best_cost = p.tour_cost(best)
