@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import itertools
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
 from gtsp_bench.solvers.heuristics.lns_paths import improve_path, path_cost, path_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
@@ -86,9 +87,38 @@ def test_passes_never_make_the_tour_worse():
     assert problem.tour_cost(tour) >= optimum - 1e-9 * optimum
 
 
-def test_paths_are_off_by_default():
-    """No sub-path passes unless asked."""
-    assert LnsSettings().paths == 0.0 and LnsSettings().fail_passes == 0
+def test_default_run_ends_with_sub_paths_above_large():
+    """By default a time-limited run above LARGE clusters keeps the end of its budget for sub-path
+    re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
+    with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off."""
+    assert LnsSettings().fail_passes == 0
+    n = LARGE + 20
+    inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+    r = run_solver("lns", inst, 0.5, seed=1, time_limit=3.0)
+    assert sorted(r.order) == list(range(n))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert r.stats["windows"] > 0
+    r = run_solver(get_solver("lns", iterations=200, trials=1, stop_at_convergence=True), inst, 0.5,
+                   seed=1, time_limit=30.0)
+    assert "windows" not in r.stats
+
+
+@pytest.mark.parametrize("n, symmetric, options, timed, share", [
+    (LARGE + 1, True, {}, True, 0.15),
+    (LARGE + 1, True, {"paths": 0.3}, True, 0.3),
+    (LARGE, True, {}, True, 0.0),  # up to LARGE clusters: never
+    (LARGE + 1, False, {}, True, 0.0),  # directed costs: never
+    (LARGE + 1, True, {}, False, 0.0),  # no time limit
+    (LARGE + 1, True, {"stop_at_convergence": True}, True, 0.0),
+    (LARGE + 1, True, {"paths": 0.0}, True, 0.0),
+])
+def test_share_of_the_budget_for_sub_paths(n, symmetric, options, timed, share):
+    """The end phase's share: ``paths`` (default 0.15) above LARGE clusters on symmetric costs in
+    a time-limited run that does not stop at convergence, else none."""
+    search = _Search.__new__(_Search)  # only the fields path_share reads
+    search.p = SimpleNamespace(n_clusters=n)
+    search.s, search.symmetric = LnsSettings(**options), symmetric
+    assert search.path_share(timed) == share
 
 
 def test_paths_option_on_a_large_cycle():

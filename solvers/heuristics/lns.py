@@ -26,10 +26,10 @@ its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an 
 windowed re-opt, sampled removals and reversing or-opt of
 :mod:`gtsp_bench.solvers.heuristics.lns_window`, and the neighbour lists take the nearest clusters of
 each quadrant (``quadrants``); on large planar instances the edge costs come from the coordinates
-(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, ``paths``
-and ``fail_passes`` (off by default) add sub-path re-solves of the best tour
-(:mod:`gtsp_bench.solvers.heuristics.lns_paths`): at the end of the budget, or after each trial
-that did not improve its start.
+(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, the last
+``paths`` share of the budget (0.15) re-solves sub-paths of the best tour
+(:mod:`gtsp_bench.solvers.heuristics.lns_paths`), and ``fail_passes`` (off by default) does so
+after each trial that did not improve its start.
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -104,7 +104,7 @@ class LnsSettings:
     macro_iterations: int = 5
     starts: int = 1
     start_iterations: int = 5
-    paths: float = 0.0
+    paths: float = 0.15
     path_clusters: int = 150
     path_iterations: int = 5
     fail_passes: int = 0
@@ -227,6 +227,18 @@ class _Search:
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
 
+    @property
+    def windowed(self) -> bool:
+        """Whether sub-path re-solves apply (``paths``, ``fail_passes``): above ``LARGE``
+        clusters, on symmetric costs."""
+        return self.p.n_clusters > LARGE and self.symmetric
+
+    def path_share(self, timed: bool) -> float:
+        """The share of the budget kept for sub-path re-solves at the end: ``paths`` where they
+        apply on a run with a time limit (``timed``) that does not ``stop_at_convergence``, else 0."""
+        s = self.s
+        return s.paths if self.windowed and timed and not s.stop_at_convergence else 0.0
+
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
         tol = REL_TOL * max(1.0, abs(kernels.tour_cost(t, self.edge, self.node)))
@@ -293,10 +305,11 @@ class _Search:
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
         clock0 = time.perf_counter()
-        windowed = p.n_clusters > LARGE and self.symmetric  # sub-path re-solves apply
-        final, tail = deadline, windowed and s.paths > 0.0 and deadline is not None
+        windowed = self.windowed
+        final, share = deadline, self.path_share(deadline is not None)
+        tail = share > 0.0
         if tail:  # the trials stop early; the rest of the budget re-solves sub-paths
-            deadline = clock0 + (1.0 - s.paths) * max(0.0, deadline - clock0)
+            deadline = clock0 + (1.0 - share) * max(0.0, deadline - clock0)
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         kinds, done = self.start_kinds(), 0
         if len(kinds) > 1 and p.n_clusters >= 4:  # up to 3 clusters the re-opt solves it
@@ -473,7 +486,8 @@ class Lns:
         Iterations per cluster of each raced start's trial (>= 1, at least 100 in all).
     paths
         Share of the time limit, in [0, 1], kept for sub-path re-solves of the best tour at the
-        end (above ``LARGE`` clusters, symmetric costs, with a time limit; default 0: none): runs
+        end (above ``LARGE`` clusters, symmetric costs, with a time limit and without
+        ``stop_at_convergence``; default 0.15, 0: none): runs
         of ``path_clusters`` consecutive clusters between their fixed neighbours, each re-solved
         as a small GTSP by these kernels and put back when cheaper, half-overlapping windows from
         random offsets until the limit (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
@@ -498,7 +512,7 @@ class Lns:
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, starts: int = 1, start_iterations: int = 5,
-        paths: float = 0.0, path_clusters: int = 150, path_iterations: int = 5,
+        paths: float = 0.15, path_clusters: int = 150, path_iterations: int = 5,
         fail_passes: int = 0,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
