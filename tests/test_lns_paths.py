@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import itertools
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings
 from gtsp_bench.solvers.heuristics.lns_paths import improve_path, path_cost, path_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
@@ -115,10 +114,7 @@ def test_default_run_ends_with_sub_paths_above_large():
 def test_share_of_the_budget_for_sub_paths(n, symmetric, options, timed, share):
     """The end phase's share: ``paths`` (default 0.15) above LARGE clusters on symmetric costs in
     a time-limited run that does not stop at convergence, else none."""
-    search = _Search.__new__(_Search)  # only the fields path_share reads
-    search.p = SimpleNamespace(n_clusters=n)
-    search.s, search.symmetric = LnsSettings(**options), symmetric
-    assert search.path_share(timed) == share
+    assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
 
 
 def test_paths_option_on_a_large_cycle():

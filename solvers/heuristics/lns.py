@@ -190,6 +190,13 @@ class LnsSettings:
             return self.reopt_window
         return 0 if n <= LARGE else 4
 
+    def path_share_for(self, n: int, symmetric: bool, timed: bool) -> float:
+        """The share of the budget kept at the end for sub-path re-solves of a cycle of ``n``
+        clusters: ``paths`` above ``LARGE`` clusters on symmetric costs in a run with a time limit
+        (``timed``) that does not ``stop_at_convergence``, else 0."""
+        applies = n > LARGE and symmetric and timed and not self.stop_at_convergence
+        return self.paths if applies else 0.0
+
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
         ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
@@ -232,12 +239,6 @@ class _Search:
         """Whether sub-path re-solves apply (``paths``, ``fail_passes``): above ``LARGE``
         clusters, on symmetric costs."""
         return self.p.n_clusters > LARGE and self.symmetric
-
-    def path_share(self, timed: bool) -> float:
-        """The share of the budget kept for sub-path re-solves at the end: ``paths`` where they
-        apply on a run with a time limit (``timed``) that does not ``stop_at_convergence``, else 0."""
-        s = self.s
-        return s.paths if self.windowed and timed and not s.stop_at_convergence else 0.0
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
@@ -305,11 +306,10 @@ class _Search:
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
         clock0 = time.perf_counter()
-        windowed = self.windowed
-        final, share = deadline, self.path_share(deadline is not None)
-        tail = share > 0.0
-        if tail:  # the trials stop early; the rest of the budget re-solves sub-paths
-            deadline = clock0 + (1.0 - share) * max(0.0, deadline - clock0)
+        final = deadline
+        tail = s.path_share_for(p.n_clusters, self.symmetric, deadline is not None)
+        if tail > 0.0:  # the trials stop early; the rest of the budget re-solves sub-paths
+            deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         kinds, done = self.start_kinds(), 0
         if len(kinds) > 1 and p.n_clusters >= 4:  # up to 3 clusters the re-opt solves it
@@ -382,7 +382,7 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.fail_passes and windowed:  # re-solve the base's sub-paths
+                if s.fail_passes and self.windowed:  # re-solve the base's sub-paths
                     saved, count = path_passes(p, base, s.path_clusters, s.path_iterations,
                                                deadline, self.rng, s.fail_passes)
                     windows, window_saving = windows + count, window_saving + saved
@@ -395,7 +395,7 @@ class _Search:
         weights.update(zip(INSERTIONS, weights_i, strict=True))
         stats = {"iterations": done, "trials": trials, "best_at": best_at, "converged": converged,
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
-        if tail:  # the rest of the budget re-solves sub-paths of the best tour
+        if tail > 0.0:  # the rest of the budget re-solves sub-paths of the best tour
             saved, count = path_passes(p, best, s.path_clusters, s.path_iterations, final, self.rng)
             windows, window_saving = windows + count, window_saving + saved
             best_cost = p.tour_cost(best)
