@@ -7,7 +7,10 @@ table beside GLNS's numbers and the three target lines (mean gap, instances whos
 hit at least once, worst run), and writes one CSV row per run.
 
 ``--large``: the symmetric GTSPLIB instances of 1,000 to 15,112 nodes (or ``--names``), ``--time``
-seconds each (60 by default), the gap to GLKH's best known tour.
+seconds each (60 by default), the gap to GLKH's best known tour. Above 400 clusters a
+time-limited lns runs on two threads where two cores are free (its default ``workers``); with
+``--jobs J`` each run gets ``cores // J`` threads unless ``--set workers=N`` says otherwise, and the
+CSV's ``workers`` column says what ran.
 
 Run from the repository root, e.g. ``.venv/bin/python benchmarks/glns.py --seeds 3 --jobs 2``;
 ``--first-seed 4 --seeds 3 --with benchmarks/out/glns.csv --out other.csv`` adds seeds 4-6 to an
@@ -31,7 +34,7 @@ from gtsp_bench.registry import get_solver, run_solver
 
 GLNS_CSV = gtsplib.folder() / "glns-45.csv"
 COLUMNS = ("instance", "seed", "budget_s", "objective", "best_known", "gap_pct", "runtime_s",
-           "status", "iterations", "trials", "best_at")
+           "status", "iterations", "trials", "best_at", "workers")
 
 
 def glns_rows() -> dict[str, dict[str, str]]:
@@ -69,7 +72,7 @@ def solve(task: tuple[str, int, float, dict]) -> dict[str, object]:
             "best_known": best, "gap_pct": 100.0 * (r.objective - best) / best,
             "runtime_s": round(r.runtime_s, 3), "status": r.status,
             "iterations": r.stats.get("iterations"), "trials": r.stats.get("trials"),
-            "best_at": r.stats.get("best_at")}
+            "best_at": r.stats.get("best_at"), "workers": r.stats.get("workers", 1)}
 
 
 def write_csv(rows: list[dict[str, object]], path: Path) -> None:
@@ -152,6 +155,8 @@ def main(argv: list[str] | None = None) -> int:
         if name not in known or (glns is not None and name not in glns):
             p.error(f"unknown instance {name!r}" + ("" if args.large else " (not in glns-45.csv)"))
     options = dict(args.options)
+    if args.jobs > 1:  # jobs x lns threads <= cores (a single job: lns's default, 2 where free)
+        options.setdefault("workers", max(1, (os.cpu_count() or 1) // args.jobs))
     get_solver("lns", **options)  # bad options fail here, once
     tasks = []
     for name in names:

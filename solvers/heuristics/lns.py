@@ -29,7 +29,9 @@ each quadrant (``quadrants``); on large planar instances the edge costs come fro
 (``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, the last
 ``paths`` share of the budget (0.15) re-solves sub-paths of the best tour
 (:mod:`gtsp_bench.solvers.heuristics.lns_paths`), and ``fail_passes`` (off by default) does so
-after each trial that did not improve its start.
+after each trial that did not improve its start. With a time limit above ``LARGE`` clusters the
+search runs on ``workers`` threads, two where the cores allow
+(:mod:`gtsp_bench.solvers.heuristics.lns_islands`).
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
 limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
@@ -49,8 +51,9 @@ import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
+from gtsp_bench.solvers.heuristics.lns_islands import default_workers, run_islands
 from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
-from gtsp_bench.solvers.heuristics.lns_paths import path_passes
+from gtsp_bench.solvers.heuristics.lns_paths import path_passes, split_path_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -108,6 +111,8 @@ class LnsSettings:
     path_clusters: int = 150
     path_iterations: int = 5
     fail_passes: int = 0
+    workers: int | None = None
+    exchange: float = 0.5
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -148,6 +153,9 @@ class LnsSettings:
         check_int("path_clusters", self.path_clusters, 2)
         check_int("path_iterations", self.path_iterations, 0)
         check_int("fail_passes", self.fail_passes, 0)
+        if self.workers is not None:
+            check_int("workers", self.workers, 1)
+        check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
 
     @property
     def hottest(self) -> float:
@@ -197,6 +205,15 @@ class LnsSettings:
         applies = n > LARGE and symmetric and timed and not self.stop_at_convergence
         return self.paths if applies else 0.0
 
+    def workers_for(self, n: int, timed: bool) -> int:
+        """Threads searching a cycle of ``n`` clusters: ``workers`` (default
+        :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`, 2 where two cores are
+        free) above ``LARGE`` clusters in a run with a time limit (``timed``) that does not
+        ``stop_at_convergence``, else 1."""
+        if not (n > LARGE and timed and not self.stop_at_convergence):
+            return 1
+        return self.workers if self.workers is not None else default_workers()
+
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
         ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
@@ -204,6 +221,24 @@ class LnsSettings:
         if self.patience is not None:
             return self.patience
         return max(50, 5 * n) if self.stop_at_convergence else self.iterations_for(n)
+
+
+@dataclass
+class _Run:
+    """Mutable state of one search's trials: its best tour, operator weights and counts."""
+
+    best: np.ndarray
+    best_cost: float
+    weights_r: np.ndarray
+    weights_i: np.ndarray
+    clock0: float  #: when its iterations began (their rate is measured from here)
+    done: int = 0  #: iterations done
+    best_at: int = 0  #: the iteration that found the best tour
+    trials: int = 0
+    converged: bool = False
+    timed_out: bool = False
+    windows: int = 0  #: sub-paths re-solved (``fail_passes``)
+    window_saving: float = 0.0
 
 
 class _Search:
@@ -300,82 +335,81 @@ class _Search:
         assert won is not None
         return (*won, done)
 
-    def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
-        """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
-        stats, whether the deadline came before convergence)."""
-        p, s = self.p, self.s
-        kernels.seed(int(self.rng.integers(2**31 - 1)))
-        clock0 = time.perf_counter()
-        final = deadline
-        tail = s.path_share_for(p.n_clusters, self.symmetric, deadline is not None)
-        if tail > 0.0:  # the trials stop early; the rest of the budget re-solves sub-paths
-            deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
+    def first(self, deadline: float | None, kind: str | None = None) -> _Run:
+        """The state before the trials: the first tour improved by the local search (``kind``,
+        default the race of ``starts`` or the greedy/``macro`` start)."""
+        s = self.s
         weights_r, weights_i = np.ones(len(REMOVALS)), np.ones(len(INSERTIONS))
         kinds, done = self.start_kinds(), 0
-        if len(kinds) > 1 and p.n_clusters >= 4:  # up to 3 clusters the re-opt solves it
+        if kind is None and len(kinds) > 1 and self.p.n_clusters >= 4:
+            clock0 = time.perf_counter()  # the race counts in the rate of iterations
             best, best_cost, weights_r, weights_i, done = self.race(kinds, deadline)
-        else:
-            best, best_cost = self.local_search(self.start_tour("macro" if s.macro else "greedy",
-                                                                deadline))
+        else:  # up to 3 clusters the re-opt solves it
+            kind = kind or ("macro" if s.macro else "greedy")
+            best, best_cost = self.local_search(self.start_tour(kind, deadline))
             clock0 = time.perf_counter()
+        return _Run(best, best_cost, weights_r, weights_i, clock0, done, best_at=done)
+
+    def trials(self, run: _Run, deadline: float | None, rng: np.random.Generator) -> None:
+        """Trials from ``run``'s best tour until converged (``stop_at_convergence``) or the
+        deadline, updating ``run`` in place."""
+        p, s = self.p, self.s
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
         floor = FIT_FLOOR * n if n <= LARGE else iterations  # a fitted trial's least length
-        best_at, trials = done, 0
-        windows, window_saving = 0, 0.0  # sub-path re-solves (paths, fail_passes)
         # A cycle of at most 3 clusters is fixed by its heads: re-opt solved it, nothing to search.
-        converged = exact = n < 4
-        timed_out = False
+        run.converged = run.converged or n < 4
+        exact = n < 4
         steps, heat = 1, 1.0
         # Trials restart from the base: the best tour, or after a cold restart that run's best.
-        base, base_cost, fails = best.copy(), best_cost, 0
+        base, base_cost, fails = run.best.copy(), run.best_cost, 0
         cold = s.restart_after > 0 and not s.stop_at_convergence and deadline is not None
         fit = s.fit_to_time and not s.stop_at_convergence and deadline is not None
-        while not exact and not (converged and (s.stop_at_convergence or deadline is None)):
+        while not exact and not (run.converged and (s.stop_at_convergence or deadline is None)):
             if is_past(deadline):
-                timed_out = True
+                run.timed_out = True
                 break
             if cold and fails >= s.restart_after:
                 base, base_cost = self.local_search(self.start_tour("random", deadline))
                 heat, fails = 1.0, 0
-                if base_cost < best_cost - REL_TOL * abs(best_cost):
-                    best, best_cost = base.copy(), base_cost
+                if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
+                    run.best, run.best_cost = base.copy(), base_cost
             cur, trial_best = base.copy(), base.copy()
             settings = self.trial_settings(cur, heat, iterations, patience)
-            costs = np.array([base_cost, best_cost, base_cost])
-            counts = np.array([0, 0, done, best_at], dtype=np.int64)
+            costs = np.array([base_cost, run.best_cost, base_cost])
+            counts = np.array([0, 0, run.done, run.best_at], dtype=np.int64)
             while True:
                 if deadline is None:
                     steps = iterations
                 tick = time.perf_counter()
-                ended = kernels.run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i,
-                                          settings, steps, self.edge, self.node, self.start,
-                                          self.near, self.cluster_of, self.symmetric)
+                ended = kernels.run_trial(cur, run.best, trial_best, costs, counts, run.weights_r,
+                                          run.weights_i, settings, steps, self.edge, self.node,
+                                          self.start, self.near, self.cluster_of, self.symmetric)
                 spent = time.perf_counter() - tick
                 if spent < CHUNK_SECONDS / 2 and not ended:
                     steps = min(2 * steps, iterations)
                 elif spent > 2 * CHUNK_SECONDS:
                     steps = max(1, steps // 2)
-                best_cost, done, best_at = float(costs[1]), int(counts[2]), int(counts[3])
-                if fit and not ended and done > 0:
+                run.best_cost, run.done, run.best_at = float(costs[1]), int(counts[2]), int(counts[3])
+                if fit and not ended and run.done > 0:
                     # The trial ends with the budget, cooled, when it cannot run all its iterations:
                     # its length is the iterations the rate so far leaves time for (at most its own).
                     # And at least fit_trials trials fit in the budget (short budgets: more, shorter
                     # trials, so that cold restarts come in time).
                     now = time.perf_counter()
-                    rate = done / max(now - clock0, 1e-9)
+                    rate = run.done / max(now - run.clock0, 1e-9)
                     left = rate * max(0.0, deadline - now)
-                    share = max(floor, rate * (deadline - clock0) / s.fit_trials)
+                    share = max(floor, rate * (deadline - run.clock0) / s.fit_trials)
                     settings[0] = min(iterations, max(counts[0] + 1, int(min(counts[0] + left, share))))
                     ended = counts[0] >= settings[0]
                 if ended:
                     break
                 if is_past(deadline):
-                    timed_out = True
+                    run.timed_out = True
                     break
-            if timed_out:
+            if run.timed_out:
                 break
-            trials += 1
+            run.trials += 1
             # A trial that did not improve its base: the next one starts hotter (and after
             # restart_after of them, from a fresh tour).
             if costs[2] < base_cost - REL_TOL * abs(base_cost):
@@ -384,24 +418,51 @@ class _Search:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
                 if s.fail_passes and self.windowed:  # re-solve the base's sub-paths
                     saved, count = path_passes(p, base, s.path_clusters, s.path_iterations,
-                                               deadline, self.rng, s.fail_passes)
-                    windows, window_saving = windows + count, window_saving + saved
+                                               deadline, rng, s.fail_passes)
+                    run.windows, run.window_saving = run.windows + count, run.window_saving + saved
                     if saved > 0.0:
                         base_cost = p.tour_cost(base)
-                        if base_cost < best_cost - REL_TOL * abs(best_cost):
-                            best, best_cost = base.copy(), base_cost
-            converged = converged or trials >= s.trials
-        weights = dict(zip(REMOVALS, weights_r, strict=True))
-        weights.update(zip(INSERTIONS, weights_i, strict=True))
-        stats = {"iterations": done, "trials": trials, "best_at": best_at, "converged": converged,
+                        if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
+                            run.best, run.best_cost = base.copy(), base_cost
+            run.converged = run.converged or run.trials >= s.trials
+
+    def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
+        """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
+        stats, whether the deadline came before convergence)."""
+        p, s = self.p, self.s
+        kernels.seed(int(self.rng.integers(2**31 - 1)))
+        final = deadline
+        timed = deadline is not None
+        tail = s.path_share_for(p.n_clusters, self.symmetric, timed)
+        if tail > 0.0:  # the trials stop early; the rest of the budget re-solves sub-paths
+            clock0 = time.perf_counter()
+            deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
+        workers = s.workers_for(p.n_clusters, timed)
+        islands: list[float] = []
+        if workers > 1:
+            run, islands = run_islands(self, workers, deadline)
+        else:
+            run = self.first(deadline)
+            self.trials(run, deadline, self.rng)
+        weights = dict(zip(REMOVALS, run.weights_r, strict=True))
+        weights.update(zip(INSERTIONS, run.weights_i, strict=True))
+        stats = {"iterations": run.done, "trials": run.trials, "best_at": run.best_at,
+                 "converged": run.converged,
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
+        if workers > 1:
+            stats.update(workers=workers, island_costs=[round(c, 6) for c in islands])
         if tail > 0.0:  # the rest of the budget re-solves sub-paths of the best tour
-            saved, count = path_passes(p, best, s.path_clusters, s.path_iterations, final, self.rng)
-            windows, window_saving = windows + count, window_saving + saved
-            best_cost = p.tour_cost(best)
-        if windows:
-            stats.update(windows=windows, window_saving=round(window_saving, 6))
-        return best, best_cost, stats, timed_out and not converged
+            if workers > 1:
+                saved, count = split_path_passes(p, run.best, s.path_clusters, s.path_iterations,
+                                                 final, self.rng, workers)
+            else:
+                saved, count = path_passes(p, run.best, s.path_clusters, s.path_iterations, final,
+                                           self.rng)
+            run.windows, run.window_saving = run.windows + count, run.window_saving + saved
+            run.best_cost = p.tour_cost(run.best)
+        if run.windows:
+            stats.update(windows=run.windows, window_saving=round(run.window_saving, 6))
+        return run.best, run.best_cost, stats, run.timed_out and not run.converged
 
 
 class Lns:
@@ -500,6 +561,15 @@ class Lns:
         Above ``LARGE`` clusters on symmetric costs, after each trial that did not improve the
         tour it started from, this many passes of sub-path re-solves (as ``paths``) over that
         tour before the next trial (>= 0; default 0: none).
+    workers
+        Threads of a time-limited search above ``LARGE`` clusters (>= 1; default: 2 where the
+        process may run on two cores and ``OMP_NUM_THREADS`` is not 1, else 1): the trials run as
+        islands from different first tours and the end phase's sub-paths on disjoint halves of
+        the tour (:mod:`gtsp_bench.solvers.heuristics.lns_islands`). Up to ``LARGE`` clusters, and
+        with ``stop_at_convergence``, one thread: the same run as before, reproducible.
+    exchange
+        With ``workers`` > 1, the share of the trials' time after which every island goes on from
+        the best island's tour, in [0, 1] (default 0.5; 1: never).
     """
 
     asymmetric = True
@@ -513,14 +583,15 @@ class Lns:
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, starts: int = 1, start_iterations: int = 5,
         paths: float = 0.15, path_clusters: int = 150, path_iterations: int = 5,
-        fail_passes: int = 0,
+        fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, starts, start_iterations, paths,
-                                    path_clusters, path_iterations, fail_passes)
+                                    path_clusters, path_iterations, fail_passes, workers,
+                                    exchange)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

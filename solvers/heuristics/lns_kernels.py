@@ -38,14 +38,14 @@ INSERTIONS = ("cheapest", "farthest", "randomised")
 WIDE_INSERT = 400
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def seed(value: int) -> None:
     """Seed the generator the kernels draw from."""
     np.random.seed(value)
 
 
 # ---------------------------------------------------------------------- removal
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) -> np.ndarray:
     """A mask of the ``k`` positions of ``t`` to take out (``how`` indexes :data:`REMOVALS`)."""
     n = len(t)
@@ -80,7 +80,7 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
 
 
 # ---------------------------------------------------------------------- insertion
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 start: np.ndarray, noise: float, best: float, best_s: int,
                 best_v: int, symmetric: bool) -> tuple[float, int, int]:
@@ -98,7 +98,7 @@ def _price_edge(c: int, e: int, at: np.ndarray, nxt: np.ndarray, edge: np.ndarra
     return best, best_s, best_v
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _price_beside(c: int, sl: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray, edge: np.ndarray,
                   node: np.ndarray, start: np.ndarray, noise: float, best: float, best_s: int,
                   best_v: int, symmetric: bool) -> tuple[float, int, int]:
@@ -108,7 +108,7 @@ def _price_beside(c: int, sl: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndar
     return _price_edge(c, sl, at, nxt, edge, node, start, noise, best, best_s, best_v, symmetric)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
                 slot_of: np.ndarray, near: np.ndarray, edge: np.ndarray, node: np.ndarray,
                 start: np.ndarray, noise: float, symmetric: bool) -> tuple[float, int, int]:
@@ -141,7 +141,7 @@ def _best_place(c: int, n_slots: int, at: np.ndarray, nxt: np.ndarray, prv: np.n
     return best, best_s, best_v
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, edge: np.ndarray,
            node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
            symmetric: bool = False) -> np.ndarray:
@@ -208,7 +208,7 @@ def insert(partial: np.ndarray, clusters: np.ndarray, how: int, noise: float, ed
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def iterate(t: np.ndarray, k: int, removal: int, insertion: int, noise: float, edge: np.ndarray,
             node: np.ndarray, start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray,
             tol: float, symmetric: bool, half: int, cost: float) -> tuple[np.ndarray, float]:
@@ -246,7 +246,7 @@ MIN_WEIGHT = 0.1
 REL_TOL = 1e-9
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _roulette(w: np.ndarray) -> int:
     """An index drawn with probability proportional to ``w``."""
     x = np.random.random() * w.sum()
@@ -289,7 +289,7 @@ def trial_settings(iterations: int, patience: int, start_temperature: float, end
                      reaction, window], dtype=np.float64)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: np.ndarray,
               counts: np.ndarray, weights_r: np.ndarray, weights_i: np.ndarray, settings: np.ndarray,
               steps: int, edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
@@ -353,7 +353,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
     return counts[0] >= iterations or counts[1] >= patience
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray, near: np.ndarray,
                           cluster_of: np.ndarray) -> np.ndarray:
     """A fresh tour (GLNS's cold start): a random node of a random cluster, then the other
@@ -365,7 +365,7 @@ def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray,
     return insert(first, order[1:].astype(np.int64), 2, 0.0, edge, node, start, near, cluster_of)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``(k, k)``: the least ``ec(edge, i, j)`` from a node of each cluster to a node of each other
     (one pass over the matrix, row by row; on points, over squared distances, rounded once per
@@ -387,7 +387,7 @@ def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
     return dist
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _nearest_first(row: np.ndarray, at_least: int) -> np.ndarray:
     """The start of ``np.argsort(row, kind="mergesort")`` (ascending, ties by index), at least
     ``at_least`` long, without sorting the whole row."""
@@ -398,7 +398,7 @@ def _nearest_first(row: np.ndarray, at_least: int) -> np.ndarray:
     return part[np.argsort(row[part], kind="mergesort")]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _quadrant_rows(dist: np.ndarray, centre: np.ndarray, count: int, per_quadrant: int) -> np.ndarray:
     """The rows of :func:`neighbours` with centres (``dist`` with an infinite diagonal)."""
     k = len(dist)

@@ -23,7 +23,7 @@ from gtsp_bench.solvers.heuristics.lns_costs import ec
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
     """Node costs plus edge costs of the closed tour ``t``."""
     n = len(t)
@@ -34,7 +34,7 @@ def tour_cost(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
 
 
 # ---------------------------------------------------------------------- local search
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi: int) -> None:
     """Reverse the cyclic run of positions ``lo .. hi`` (or, the same cycle, its complement when
     that is shorter), keeping ``pos`` (the position of each cluster) in step."""
@@ -49,7 +49,7 @@ def _reverse(t: np.ndarray, pos: np.ndarray, cluster_of: np.ndarray, lo: int, hi
         pos[cluster_of[t[q]]] = q
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) -> None:
     """Wake (every don't-look bit of) the cluster at position ``i`` and its two tour neighbours."""
     n = len(t)
@@ -59,7 +59,7 @@ def _touch(active: np.ndarray, cluster_of: np.ndarray, t: np.ndarray, i: int) ->
             active[r, c] = True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
             cluster_of: np.ndarray, tol: float, active: np.ndarray) -> float:
     """2-opt with fixed heads over neighbour lists and don't-look bits, first improvement, in place.
@@ -106,7 +106,7 @@ def two_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
     return gained
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
              start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
              active: np.ndarray, symmetric: bool = False, awake_only: bool = False) -> float:
@@ -186,7 +186,7 @@ def move_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray,
     return gained
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
            cluster_of: np.ndarray, tol: float, active: np.ndarray, reverse: bool = False) -> float:
     """Or-opt with fixed heads, first improvement, in place: the run of 2 or 3 clusters starting
@@ -253,7 +253,7 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
     return gained
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
           cluster_of: np.ndarray) -> float:
     """Optimal heads for the cluster order of ``t`` (in place); returns the tour's new cost."""
@@ -310,7 +310,7 @@ def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
     return best_total
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
                  rows: int) -> tuple[np.ndarray, np.ndarray]:
     """A local search's start: each cluster's position in ``t`` and ``rows`` rows of don't-look
@@ -326,7 +326,7 @@ def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
     return pos, active
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                near: np.ndarray, cluster_of: np.ndarray, tol: float, active: np.ndarray,
                symmetric: bool, large: bool = False, cost: float = 0.0) -> tuple[bool, float]:
@@ -343,7 +343,7 @@ def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarra
     return moved > 0.0 or shifted > 0.0, tour_cost(t, edge, node)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                  near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
                  symmetric: bool) -> float:

@@ -19,6 +19,7 @@ that more trials of the whole tour do not (docs/notes/lns-vs-glns.md, eighth ses
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
@@ -137,3 +138,54 @@ def path_passes(problem: Problem, tour: np.ndarray, length: int, iterations: int
         if deadline is None and passes is None:
             break
     return saved, done
+
+
+def region_windows(lo: int, size: int, length: int) -> list[tuple[int, int]]:
+    """Windows ``(first position, clusters)`` that sweep the region of ``size`` positions from
+    ``lo`` (cyclic) and stay off its last position, which the next region's windows take as their
+    fixed start: ``length`` clusters every ``length // 2`` positions, the last one shortened."""
+    room = size - 1
+    if room < 2:
+        return []
+    length = min(length, room)
+    step = max(1, length // 2)
+    out = []
+    for w in range(0, room, step):
+        out.append((lo + w, min(length, room - w)))
+        if w + length >= room:
+            break
+    return [(first, count) for first, count in out if count >= 2]
+
+
+def split_path_passes(problem: Problem, tour: np.ndarray, length: int, iterations: int,
+                      deadline: float, rng: np.random.Generator, workers: int
+                      ) -> tuple[float, int]:
+    """:func:`path_passes` on ``workers`` threads: each pass cuts the tour at a random offset into
+    ``workers`` regions of consecutive positions and each thread sweeps the windows of its own
+    region (:func:`region_windows`). A region's windows never touch its last position, so no window
+    changes a fixed end of another's, and the threads write disjoint positions of ``tour``. Passes
+    go on until ``deadline``; returns (the saving, the windows solved)."""
+    n = len(tour)
+    seeds = rng.integers(2**31 - 1, size=workers)
+    totals = np.zeros((workers, 2))
+
+    def sweep(j: int, windows: list[tuple[int, int]], first: bool) -> None:
+        if first:
+            kernels.seed(int(seeds[j]))  # numba's random state is the thread's own
+        for lo, count in windows:
+            if is_past(deadline):
+                return
+            totals[j, 0] += improve_path(problem, tour, lo % n, count, iterations)
+            totals[j, 1] += 1
+
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="lns-paths") as pool:
+        first = True
+        while not is_past(deadline):
+            offset = int(rng.integers(n))
+            cuts = [offset + (n * j) // workers for j in range(workers + 1)]
+            jobs = [pool.submit(sweep, j, region_windows(cuts[j], cuts[j + 1] - cuts[j], length),
+                                first) for j in range(workers)]
+            for job in jobs:
+                job.result()
+            first = False
+    return float(totals[:, 0].sum()), int(totals[:, 1].sum())

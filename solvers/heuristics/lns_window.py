@@ -28,7 +28,7 @@ from gtsp_bench.solvers.heuristics.lns_local import (
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def reopt_window(t: np.ndarray, lo: int, length: int, edge: np.ndarray, node: np.ndarray,
                  start: np.ndarray, cluster_of: np.ndarray, tol: float) -> float:
     """Optimal heads for the ``length`` positions ``lo .. lo + length - 1`` (cyclic) of ``t``, the
@@ -76,7 +76,7 @@ def reopt_window(t: np.ndarray, lo: int, length: int, edge: np.ndarray, node: np
     return old - best
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                   cluster_of: np.ndarray, tol: float, active: np.ndarray, half: int) -> float:
     """Re-opt the windows of ``half`` positions either side of each cluster marked in
@@ -128,7 +128,7 @@ def reopt_changed(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.n
     return gain
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def runs_cost(t: np.ndarray, marked: np.ndarray, edge: np.ndarray, node: np.ndarray) -> float:
     """What the marked positions of the cycle ``t`` (not all of them) add to its cost: for each
     maximal run of them, its nodes and the edges into, along and out of it, less the edge that
@@ -148,7 +148,7 @@ def runs_cost(t: np.ndarray, marked: np.ndarray, edge: np.ndarray, node: np.ndar
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                         near: np.ndarray, cluster_of: np.ndarray, tol: float, awake: np.ndarray,
                         symmetric: bool, half: int, cost: float) -> float:
@@ -175,7 +175,7 @@ def local_search_window(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start
         return tour_cost(t, edge, node) if exact else cost
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _distinct_positions(n: int, count: int, mark: np.ndarray) -> np.ndarray:
     """``count`` distinct random positions below ``n`` (``count`` well below ``n``), marked."""
     out = np.empty(count, dtype=np.int64)
@@ -189,7 +189,7 @@ def _distinct_positions(n: int, count: int, mark: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def remove_near(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray,
                 near: np.ndarray, cluster_of: np.ndarray) -> np.ndarray:
     """The removals of :func:`gtsp_bench.solvers.heuristics.lns_kernels.remove` on a large cycle

@@ -1,0 +1,130 @@
+"""lns on several threads: the islands' rule and starts, the merged answer, split sub-path passes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Run, _Search
+from gtsp_bench.solvers.heuristics.lns_islands import (
+    AUTO_WORKERS,
+    default_workers,
+    island_kinds,
+    merge,
+)
+from gtsp_bench.solvers.heuristics.lns_paths import region_windows, split_path_passes
+from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after
+
+from gtsp_bench.energy import evaluate
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.problem import price
+from gtsp_bench.registry import get_solver, run_solver
+
+
+@pytest.mark.parametrize("n, options, timed, workers", [
+    (LARGE + 1, {"workers": 2}, True, 2),
+    (LARGE + 1, {"workers": 1}, True, 1),
+    (LARGE, {"workers": 2}, True, 1),  # up to LARGE clusters: one
+    (LARGE + 1, {"workers": 2}, False, 1),  # no time limit
+    (LARGE + 1, {"workers": 2, "stop_at_convergence": True}, True, 1),
+])
+def test_threads_by_size_and_budget(n, options, timed, workers):
+    """``workers`` threads above LARGE clusters in a time-limited run that does not stop at
+    convergence (a converging run stays reproducible), else one."""
+    assert LnsSettings(**options).workers_for(n, timed) == workers
+
+
+def test_default_threads_follow_the_cores_and_omp(monkeypatch):
+    """By default two threads where two cores are free, one on one core or where OMP_NUM_THREADS
+    says 1 (the runner's workers), never more than two; a setting that is not a number is
+    ignored. Up to LARGE clusters the default is one thread whatever the machine."""
+    assert default_workers({}, cores=2) == 2
+    assert default_workers({}, cores=16) == AUTO_WORKERS == 2
+    assert default_workers({}, cores=1) == 1
+    assert default_workers({"OMP_NUM_THREADS": "1"}, cores=8) == 1
+    assert default_workers({"OMP_NUM_THREADS": "4"}, cores=8) == 2
+    assert default_workers({"OMP_NUM_THREADS": "auto"}, cores=2) == 2
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    assert LnsSettings().workers_for(LARGE + 1, True) == 1
+    monkeypatch.delenv("OMP_NUM_THREADS")
+    assert LnsSettings().workers_for(LARGE, True) == 1
+
+
+def test_island_starts():
+    """The islands start from the usual first tour, then the macro tour on a planar instance, then
+    random insertion; with macro=True the macro tour comes first and is not repeated."""
+    inst = generate_instance(LARGE + 5, 2, seed=1, zeta=10.0, area=4000.0)
+    plain = _Search(price(inst, 0.5), LnsSettings(), np.random.default_rng(0))
+    assert plain.centre is not None  # quadrants above LARGE: the centres are known
+    assert island_kinds(plain, 3) == ["greedy", "macro", "random"]
+    assert island_kinds(plain, 1) == ["greedy"]
+    macro = _Search(price(inst, 0.5), LnsSettings(macro=True), np.random.default_rng(0))
+    assert island_kinds(macro, 3) == ["macro", "random", "random"]
+
+
+def test_merge_keeps_the_cheapest_and_sums_the_counts():
+    """The merged state is the cheapest island's tour with every island's iterations and trials."""
+    ones = np.ones(3)
+    runs = [_Run(np.arange(4), cost, ones, ones, 0.0, done=10 * i + 5, trials=i + 1,
+                 converged=True) for i, cost in enumerate((5.0, 3.0, 4.0))]
+    win = merge(runs)
+    assert win.best_cost == 3.0 and win.done == 5 + 15 + 25 and win.trials == 6
+    assert win.converged and not win.timed_out
+
+
+@pytest.mark.parametrize("exchange", [0.5, 1.0])
+def test_two_workers_on_a_large_cycle(exchange):
+    """With workers=2 above LARGE clusters both islands search (their iterations summed in the
+    stats, both cores' worth of CPU time is not asserted: CI may have one): a valid tour, priced
+    as the evaluator prices it, no worse than the greedy tour it can start from."""
+    n = LARGE + 20
+    inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+    r = run_solver(get_solver("lns", workers=2, exchange=exchange), inst, 0.5, seed=1,
+                   time_limit=3.0)
+    assert sorted(r.order) == list(range(n))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert r.stats["workers"] == 2 and r.stats["iterations"] > 0 and r.stats["windows"] > 0
+    problem = price(inst, 0.5)
+    greedy = problem.tour_cost(np.array(greedy_tour(problem, anchor_node(problem))))
+    assert r.objective <= greedy
+
+
+@pytest.mark.parametrize("lo, size, length", [(0, 400, 150), (37, 301, 150), (5, 9, 150),
+                                              (3, 160, 4)])
+def test_region_windows_stay_off_the_last_position(lo, size, length):
+    """A region's windows cover each of its positions but the last, never reach past it, and
+    hold at least 2 and at most ``length`` clusters."""
+    windows = region_windows(lo, size, length)
+    covered = set()
+    for first, count in windows:
+        assert 2 <= count <= length and first >= lo and first + count <= lo + size - 1
+        covered.update(range(first, first + count))
+    assert covered == set(range(lo, lo + size - 1))
+    assert region_windows(0, 2, 150) == []
+
+
+def test_split_passes_never_make_the_tour_worse():
+    """Two threads sweeping their halves of a greedy tour for a second: a valid tour, the saving
+    is what the tour lost, and windows were solved."""
+    inst = generate_instance(40, 3, seed=4)
+    problem = price(inst, 0.5)
+    tour = np.array(greedy_tour(problem, anchor_node(problem)), dtype=np.int64)
+    cost = problem.tour_cost(tour)
+    kernels.seed(2)
+    saved, windows = split_path_passes(problem, tour, 12, 2, deadline_after(1.0),
+                                       np.random.default_rng(0), 2)
+    assert windows > 0 and saved >= 0.0
+    assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
+    assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"workers": 0}, "workers must be an integer >= 1"),
+    ({"exchange": 1.5}, "exchange must be a number in"),
+])
+def test_bad_options_rejected(options, message):
+    """Invalid thread settings raise InputError naming the setting."""
+    with pytest.raises(InputError, match=message):
+        get_solver("lns", **options)
