@@ -175,6 +175,8 @@ def test_operators_are_all_used():
     ({"fit_trials": 0}, "fit_trials must be an integer >= 1"),
     ({"macro": 1}, "macro must be true or false"),
     ({"macro_iterations": -1}, "macro_iterations must be an integer >= 0"),
+    ({"macro_groups": -1}, "macro_groups must be a number >= 0"),
+    ({"macro_groups": float("nan")}, "macro_groups must be a number >= 0"),
     ({"starts": 0}, "starts must be an integer >= 1"),
     ({"start_iterations": 0}, "start_iterations must be an integer >= 1"),
 ])

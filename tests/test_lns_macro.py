@@ -9,7 +9,13 @@ import pytest
 from gtsp_bench.solvers.heads import optimal_heads
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
-from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
+from gtsp_bench.solvers.heuristics.lns_macro import (
+    centre_groups,
+    centre_order,
+    cluster_centres,
+    grouped_costs,
+    macro_tour,
+)
 
 from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
@@ -73,6 +79,77 @@ def test_centre_order_stops_at_a_past_deadline():
 def test_centre_order_of_very_few_points(k):
     """Up to three points every order is the same cycle."""
     assert centre_order(np.zeros((k, 2)), 10, large=400).tolist() == list(range(k))
+
+
+def _blobs(sizes: list[int], seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Blobs of points 2 apart on a jittered grid 8 wide, the blobs 1,000 apart on a line,
+    shuffled, and each point's blob."""
+    rng = np.random.default_rng(seed)
+    blob = np.repeat(np.arange(len(sizes)), sizes)
+    j = np.concatenate([np.arange(m) for m in sizes])
+    xy = np.column_stack([1000.0 * blob + 2.0 * (j % 8), 2.0 * (j // 8)])
+    xy += rng.uniform(-0.3, 0.3, xy.shape)
+    perm = rng.permutation(len(blob))
+    return xy[perm], blob[perm]
+
+
+def _crossings(groups: np.ndarray, order: np.ndarray) -> int:
+    """Edges of the closed tour ``order`` between two groups."""
+    return int(np.sum(groups[order] != groups[np.roll(order, -1)]))
+
+
+def test_centre_groups_are_the_blobs():
+    """Separated blobs are one group each (the same partition, whatever the labels); a uniform
+    grid is one group; repeated points (median nearest distance 0) are one group."""
+    xy, blob = _blobs([30, 5, 12, 1], seed=0)
+    groups = centre_groups(xy, 5.0)
+    assert len(np.unique(groups)) == 4
+    for b in range(4):  # each blob maps to exactly one label, distinct blobs to distinct labels
+        assert len(np.unique(groups[blob == b])) == 1
+    assert len({int(groups[blob == b][0]) for b in range(4)}) == 4
+    grid = np.array([[x, y] for x in range(20) for y in range(20)], dtype=float)
+    assert np.all(centre_groups(grid, 5.0) == 0)
+    assert np.all(centre_groups(np.zeros((9, 2)), 5.0) == 0)
+    assert centre_groups(np.zeros((1, 2)), 5.0).tolist() == [0]
+
+
+def test_grouped_costs_add_more_than_any_edge_between_groups():
+    """Within a group the distance; between two groups the distance plus the bounding box's
+    diagonal (so one crossing more always costs more than any saving in length)."""
+    xy = np.array([[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]])
+    cost = grouped_costs(xy, np.array([0, 0, 1]))
+    diagonal = 10.0
+    np.testing.assert_allclose(cost, [[0, 5, 10 + diagonal], [5, 0, 5 + diagonal],
+                                      [10 + diagonal, 5 + diagonal, 0]])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_grouped_centre_order_enters_each_group_once(seed):
+    """Five blobs on a line: the plain centre tour splits blobs between its way out and its way
+    back (more crossings than groups); with the groups it crosses once per group, and is still
+    a permutation."""
+    xy, _ = _blobs([40, 25, 60, 30, 35], seed)
+    groups = centre_groups(xy, 5.0)
+    assert len(np.unique(groups)) == 5
+    kernels.seed(seed)
+    plain = centre_order(xy, 300, large=100)
+    kernels.seed(seed)
+    order = centre_order(xy, 300, large=100, groups=groups)
+    assert sorted(order.tolist()) == list(range(len(xy)))
+    assert _crossings(groups, order) == 5 < _crossings(groups, plain)
+
+
+def test_centre_order_ignores_groups_where_one_holds_half():
+    """One group, or one group of at least half the points beside small ones: the ungrouped
+    tour (the same kernel seed gives the same order)."""
+    pts = np.random.default_rng(3).uniform(0, 1000, size=(120, 2))
+    outliers = np.zeros(120, dtype=np.int64)
+    outliers[:10] = np.arange(1, 11)
+    runs = []
+    for g in (None, np.zeros(120, dtype=np.int64), outliers):
+        kernels.seed(3)
+        runs.append(centre_order(pts, 300, large=100, groups=g))
+    assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
 
 
 def test_macro_tour_keeps_the_order_with_optimal_heads():

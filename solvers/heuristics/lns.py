@@ -52,7 +52,13 @@ from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
 from gtsp_bench.solvers.heuristics.lns_islands import default_workers, run_islands
-from gtsp_bench.solvers.heuristics.lns_macro import centre_order, cluster_centres, macro_tour
+from gtsp_bench.solvers.heuristics.lns_macro import (
+    GROUPED_MAX,
+    centre_groups,
+    centre_order,
+    cluster_centres,
+    macro_tour,
+)
 from gtsp_bench.solvers.heuristics.lns_paths import path_passes, split_path_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
@@ -105,6 +111,7 @@ class LnsSettings:
     quadrants: bool | None = None
     macro: bool = False
     macro_iterations: int = 5
+    macro_groups: float = 5.0
     starts: int = 1
     start_iterations: int = 5
     paths: float = 0.15
@@ -147,6 +154,7 @@ class LnsSettings:
             check_bool("quadrants", self.quadrants)
         check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
+        check_float("macro_groups", self.macro_groups, 0.0, math.inf, open_low=False)
         check_int("starts", self.starts, 1)
         check_int("start_iterations", self.start_iterations, 1)
         check_float("paths", self.paths, 0.0, 1.0, open_low=False)
@@ -262,6 +270,8 @@ class _Search:
         points = points_of(problem) if wants else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
+        #: The centres' groups for the macro tour (``macro_groups``), found on first use.
+        self.groups: np.ndarray | None = None
         if points is None or not settings.quadrants_for(n):
             self.near = kernels.neighbours(self.edge, self.start, count)
         else:
@@ -292,7 +302,9 @@ class _Search:
                                                  self.cluster_of)
         if kind != "macro" or self.centre is None or n < 5:
             return greedy_tour(self.p, anchor_node(self.p))
-        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline)
+        if self.s.macro_groups > 0.0 and self.groups is None and n <= GROUPED_MAX:
+            self.groups = centre_groups(self.centre, self.s.macro_groups)
+        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline, self.groups)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
 
     def start_kinds(self) -> list[str]:
@@ -537,6 +549,12 @@ class Lns:
     macro_iterations
         Iterations per cluster of the centre tour's annealing trial (>= 0; 0: random insertion and
         local search only).
+    macro_groups
+        The macro tour enters each group of centres once: centres at most this many times the
+        median distance between nearest centres apart are one group
+        (:func:`~gtsp_bench.solvers.heuristics.lns_macro.centre_groups`; >= 0, default 5; 0: no
+        groups). Changes only clustered instances (2000C10k.0 has 34 groups; the uniform, road
+        and city files one or a few).
     starts
         First tours raced (>= 1; default 1, no race): the first ``starts`` of the greedy tour,
         the macro tour (planar instances) and random-insertion tours, each improved by the local
@@ -581,7 +599,8 @@ class Lns:
         neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
-        macro_iterations: int = 5, starts: int = 1, start_iterations: int = 5,
+        macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
+        start_iterations: int = 5,
         paths: float = 0.15, path_clusters: int = 150, path_iterations: int = 5,
         fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
     ) -> None:
@@ -589,7 +608,7 @@ class Lns:
                                     start_temperature, end_temperature, reaction, noise,
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
-                                    macro_iterations, starts, start_iterations, paths,
+                                    macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, fail_passes, workers,
                                     exchange)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock

@@ -12,6 +12,14 @@ instead:
 3. the heads for that cluster order, chosen optimally by the kernels' exact re-opt
    (:func:`macro_tour`).
 
+On a clustered instance the centres fall into **groups** (:func:`centre_groups`: centres closer
+than a few times the typical distance between neighbouring centres belong together), and the best
+known tours cross each group about once: on 2000C10k.0, 35 crossings between its 34 groups, where
+a plain tour through the centres made 40-43. With ``groups`` the centre tour pays a penalty for
+each edge between two groups, larger than any edge, so it enters every group exactly once and
+orders the groups as well as it can. Where one group holds half the centres or more (the uniform,
+road and city files) nothing changes.
+
 The caller then improves it by the local search and starts the usual trials from it.
 """
 
@@ -21,11 +29,21 @@ import math
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+from scipy.spatial.distance import cdist
 
 #: The centre tour's neighbour lists: the 2 nearest centres in each quadrant and the nearest.
 CENTRE_NEIGHBOURS = 10
 #: Iterations of the centre tour's trial between two looks at the deadline.
 CENTRE_CHUNK = 2000
+#: Up to this many centres a grouped centre tour is solved on a dense matrix (the penalties);
+#: beyond it the centre tour ignores the groups (200 MB at 5,000).
+GROUPED_MAX = 5000
+#: The groups apply where no group holds this share of the centres (a clustered instance): one
+#: large group and a few outlying ones, as on the road and city files, change nothing.
+GROUPED_LARGEST = 0.5
 
 
 def cluster_centres(xy: np.ndarray, start: np.ndarray) -> np.ndarray:
@@ -34,8 +52,35 @@ def cluster_centres(xy: np.ndarray, start: np.ndarray) -> np.ndarray:
     return np.add.reduceat(xy[: start[-1]], start[:-1], axis=0) / np.diff(start)[:, None]
 
 
+def centre_groups(centre: np.ndarray, factor: float) -> np.ndarray:
+    """``(k,)`` group labels ``0 .. g - 1`` of the points ``centre``: the connected components of
+    the graph joining two centres at most ``factor`` times the median distance from a centre to
+    its nearest other centre apart (``factor`` > 0). Where that median is 0 (most centres
+    repeated), one group."""
+    k = len(centre)
+    if k < 2:
+        return np.zeros(k, dtype=np.int64)
+    tree = cKDTree(centre)
+    nearest = np.median(tree.query(centre, 2)[0][:, 1])
+    if not nearest > 0.0:
+        return np.zeros(k, dtype=np.int64)
+    pairs = tree.query_pairs(factor * nearest, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(k, k))
+    return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+def grouped_costs(centre: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """``(k, k)``: the distances between the centres plus, between two groups, the diagonal of
+    their bounding box (more than any edge)."""
+    cost = cdist(centre, centre)
+    span = centre.max(axis=0) - centre.min(axis=0)
+    cost += float(np.hypot(span[0], span[1])) * (groups[:, None] != groups[None, :])
+    cost.setflags(write=False)  # typed as lns_costs leaves a matrix: the cached kernels apply
+    return cost
+
+
 def centre_order(centre: np.ndarray, iterations: int, large: int,
-                 deadline: float | None = None) -> np.ndarray:
+                 deadline: float | None = None, groups: np.ndarray | None = None) -> np.ndarray:
     """A short closed tour through the points ``centre``: the cluster order, each index once.
 
     Random insertion and the local search of lns, then (with ``iterations`` > 0 and at least 5
@@ -44,13 +89,19 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     :mod:`gtsp_bench.solvers.heuristics.lns_window` above ``large`` points. Random numbers come
     from the kernels' generator (:func:`gtsp_bench.solvers.heuristics.lns_kernels.seed`), so the
     order is reproducible for a seed; a ``deadline`` that passes cuts the trial (its best so far).
+    With ``groups`` (labels, :func:`centre_groups`) none of which holds
+    :data:`GROUPED_LARGEST` of the points, and at most :data:`GROUPED_MAX` points, each edge
+    between two groups costs a penalty more than any edge (:func:`grouped_costs`): the tour
+    enters each group once. The trial's temperatures come from the plain distances either way.
     """
     k = len(centre)
     if k <= 3:
         return np.arange(k, dtype=np.int64)
     xy = np.ascontiguousarray(centre, dtype=np.float64)
     xy.setflags(write=False)  # typed as lns_costs.points_of leaves points: the cached kernels apply
-    costs = (xy, 1, 1.0)  # EUCLIDEAN, unrounded
+    grouped = (groups is not None and k <= GROUPED_MAX
+               and np.bincount(groups).max() < GROUPED_LARGEST * k)
+    costs = grouped_costs(xy, groups) if grouped else (xy, 1, 1.0)  # EUCLIDEAN, unrounded
     node = np.zeros(k)
     node.setflags(write=False)
     start = np.arange(k + 1, dtype=np.int64)
@@ -62,7 +113,7 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     cost = kernels.local_search(t, costs, node, start, near, cluster_of, tol, awake, True)
     if iterations <= 0 or k < 5:
         return t
-    mean_edge = cost / k
+    mean_edge = float(np.mean(np.hypot(*(xy[t] - xy[np.roll(t, -1)]).T))) if grouped else cost / k
     settings = kernels.trial_settings(iterations, iterations, mean_edge, 0.003 * mean_edge,
                                       min(25, math.ceil(0.3 * k)), 0.1 * mean_edge, 0.1,
                                       4 if k > large else 0)
