@@ -18,7 +18,8 @@ simulated-annealing acceptance, the temperature cooling geometrically over a tri
 after ``iterations`` iterations or ``patience`` without a new trial best (by default only with
 ``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
 hotter start); the first trial starts from the greedy tour (or on planar instances, with ``macro``, the
-macro tour) improved by the local search (with ``starts``, from the best of several first tours
+macro tour, which on a clustered instance enters each group of clusters once: ``macro_groups``)
+improved by the local search (with ``starts``, from the best of several first tours
 after a short trial each), later ones
 from the best tour so far, and a trial that did not improve it makes the next one hotter
 (temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
