@@ -54,7 +54,6 @@ from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
 from gtsp_bench.solvers.heuristics.lns_islands import default_workers, run_islands
 from gtsp_bench.solvers.heuristics.lns_macro import (
-    GROUPED_MAX,
     centre_groups,
     centre_order,
     cluster_centres,
@@ -271,8 +270,6 @@ class _Search:
         points = points_of(problem) if wants else None
         #: Each cluster's centre on a planar instance (for the quadrants or the macro tour).
         self.centre = None if points is None else cluster_centres(points[0], self.start)
-        #: The centres' groups for the macro tour (``macro_groups``), found on first use.
-        self.groups: np.ndarray | None = None
         if points is None or not settings.quadrants_for(n):
             self.near = kernels.neighbours(self.edge, self.start, count)
         else:
@@ -303,9 +300,8 @@ class _Search:
                                                  self.cluster_of)
         if kind != "macro" or self.centre is None or n < 5:
             return greedy_tour(self.p, anchor_node(self.p))
-        if self.s.macro_groups > 0.0 and self.groups is None and n <= GROUPED_MAX:
-            self.groups = centre_groups(self.centre, self.s.macro_groups)
-        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline, self.groups)
+        groups = centre_groups(self.centre, self.s.macro_groups) if self.s.macro_groups else None
+        order = centre_order(self.centre, self.s.macro_iterations * n, LARGE, deadline, groups)
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
 
     def start_kinds(self) -> list[str]:
