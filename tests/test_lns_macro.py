@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.heads import optimal_heads
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics import lns_macro
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
 from gtsp_bench.solvers.heuristics.lns_macro import (
     centre_groups,
@@ -242,6 +243,19 @@ def test_grouped_centre_order_enters_each_group_once(seed):
     order = centre_order(xy, 300, large=100, groups=groups)
     assert sorted(order.tolist()) == list(range(len(xy)))
     assert _crossings(groups, order) == 5 < _crossings(groups, plain)
+
+
+def test_many_groups_are_ordered_by_the_penalty_alone(monkeypatch):
+    """Above GROUP_ORDER_MAX groups no group tour is solved (patched to 3 here): the centre tour
+    still enters each of the five blobs once."""
+    monkeypatch.setattr(lns_macro, "GROUP_ORDER_MAX", 3)
+    monkeypatch.setattr(lns_macro, "group_order", None)  # would raise if called
+    xy, _ = _blobs([40, 25, 60, 30, 35], seed=4)
+    groups = centre_groups(xy, 5.0)
+    kernels.seed(4)
+    order = centre_order(xy, 300, large=100, groups=groups)
+    assert sorted(order.tolist()) == list(range(len(xy)))
+    assert _crossings(groups, order) == 5
 
 
 def test_centre_order_ignores_groups_where_one_holds_half():

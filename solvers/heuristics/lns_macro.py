@@ -48,7 +48,7 @@ GROUPED_MAX = 5000
 #: The groups apply where no group holds this share of the centres (a clustered instance): one
 #: large group and a few outlying ones, as on the road and city files, change nothing.
 GROUPED_LARGEST = 0.5
-#: Below this many groups their order is solved first (:func:`group_order`) and the centre tour
+#: Up to this many groups their order is solved first (:func:`group_order`) and the centre tour
 #: follows it; above, the penalty alone orders them.
 GROUP_ORDER_MAX = 300
 
@@ -205,7 +205,7 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     With ``groups`` (labels, :func:`centre_groups`) none of which holds
     :data:`GROUPED_LARGEST` of the points, and at most :data:`GROUPED_MAX` points, each edge
     between two groups costs a penalty more than any edge (:func:`grouped_costs`): the tour
-    enters each group once. Below :data:`GROUP_ORDER_MAX` groups their order is solved first
+    enters each group once. Up to :data:`GROUP_ORDER_MAX` groups their order is solved first
     (:func:`group_order`), the centre tour starts from :func:`group_chain` instead of random
     insertion, and an edge between two groups not next to each other in that order costs three
     penalties: the tour keeps the group order. The trial's temperatures come from the plain
@@ -221,7 +221,8 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
     if not grouped:
         return _short_tour((xy, 1, 1.0), xy, iterations, large, deadline)  # EUCLIDEAN, unrounded
     assert groups is not None
-    order = group_order(xy, groups, large, deadline) if groups.max() < GROUP_ORDER_MAX else None
+    few = int(groups.max()) + 1 <= GROUP_ORDER_MAX  # labels 0 .. g - 1
+    order = group_order(xy, groups, large, deadline) if few else None
     first = None if order is None else group_chain(xy, groups, order)
     return _short_tour(grouped_costs(xy, groups, order), xy, iterations, large, deadline,
                        penalised=True, first=first)
