@@ -288,3 +288,13 @@ def test_macro_tour_keeps_the_order_with_optimal_heads():
     _, best = optimal_heads(problem, order)
     assert problem.tour_cost(t) == pytest.approx(best, rel=1e-12)
     assert kernels.tour_cost(t, edge, node) == pytest.approx(best, rel=1e-12)
+
+
+@pytest.mark.parametrize("order", [[0, 1, 1, 2], [0, 1, 2], [0, 1, 2, 3, 4]])
+def test_macro_tour_refuses_an_order_that_is_not_a_permutation(order):
+    """A repeated, missing or extra cluster is refused before the kernels see it (their trials
+    assume each cluster once, and did not end on a tour with a repeat)."""
+    start = np.array([0, 2, 4, 6, 8], dtype=np.int64)
+    xy = np.arange(16, dtype=np.float64).reshape(8, 2)
+    with pytest.raises(ValueError, match="every cluster exactly once"):
+        macro_tour(np.array(order), (xy, 1, 1.0), np.zeros(8), start, np.repeat(np.arange(4), 2))

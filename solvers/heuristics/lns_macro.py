@@ -231,7 +231,11 @@ def centre_order(centre: np.ndarray, iterations: int, large: int,
 def macro_tour(order: np.ndarray, edge: np.ndarray | tuple, node: np.ndarray, start: np.ndarray,
                cluster_of: np.ndarray) -> np.ndarray:
     """The tour (node ids) visiting the clusters in ``order`` with optimal heads for it (the
-    kernels' exact re-opt; ``edge``, ``node``, ``start``, ``cluster_of`` as the kernels take them)."""
+    kernels' exact re-opt; ``edge``, ``node``, ``start``, ``cluster_of`` as the kernels take them).
+    An ``order`` that does not visit every cluster exactly once is a :class:`ValueError` (the
+    kernels assume a permutation: given a repeated cluster, their trials do not end)."""
+    if not np.array_equal(np.sort(order), np.arange(len(start) - 1)):
+        raise ValueError("the macro tour's order must visit every cluster exactly once")
     t = np.ascontiguousarray(start[np.asarray(order, dtype=np.int64)], dtype=np.int64)
     kernels.reopt(t, edge, node, start, cluster_of)
     return t
