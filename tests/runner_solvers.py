@@ -64,6 +64,23 @@ class Banner:
 KILLS_FILE = "GTSP_BENCH_TEST_KILLS"
 
 
+def take_kill(path) -> bool:
+    """Count the number in the file ``path`` down by one if it is > 0, under an exclusive lock
+    (two workers solving at once must not both read the same count and both die); whether it
+    was."""
+    import fcntl
+
+    with open(path, "r+") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        left = int(f.read() or 0)
+        if left > 0:
+            f.seek(0)
+            f.truncate()
+            f.write(str(left - 1))
+            f.flush()
+        return left > 0  # the lock goes with the file's closing
+
+
 class KilledFromOutside:
     """While the number in the file ``$GTSP_BENCH_TEST_KILLS`` is > 0, counts it down and kills
     its own worker with SIGKILL mid-solve (as the OOM killer or ``kill -9`` would); greedy
@@ -76,10 +93,7 @@ class KilledFromOutside:
 
         from gtsp_bench.solvers.heuristics.greedy import Greedy
 
-        path = Path(os.environ[KILLS_FILE])
-        left = int(path.read_text())
-        if left > 0:
-            path.write_text(str(left - 1))
+        if take_kill(Path(os.environ[KILLS_FILE])):
             os.kill(os.getpid(), signal.SIGKILL)
         return Greedy().solve(instance, omega)
 
@@ -102,10 +116,7 @@ class KillsItsDaskWorker:
 
         from gtsp_bench.solvers.heuristics.greedy import Greedy
 
-        path = Path(os.environ[KILLS_FILE])
-        left = int(path.read_text())
-        if left > 0:
-            path.write_text(str(left - 1))
+        if take_kill(Path(os.environ[KILLS_FILE])):
             os.kill(os.getppid(), signal.SIGKILL)
             time.sleep(1)  # never answers: its Dask worker is gone
         return Greedy().solve(instance, omega)

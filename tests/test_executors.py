@@ -110,6 +110,19 @@ def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path,
     assert err.count("\n") == 1 and f"{lock}: locked by another gtsp-bench bench" in err
 
 
+def test_a_kill_is_taken_once_by_racing_processes(tmp_path):
+    """The test solvers' kill count is taken under a lock: eight processes racing for one kill,
+    exactly one gets it (without the lock two Dask workers both read 1 and both died)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    kills = tmp_path / "kills"
+    kills.write_text("1")
+    with ProcessPoolExecutor(max_workers=8) as pool:
+        taken = list(pool.map(runner_solvers.take_kill, [kills] * 8))
+    assert taken.count(True) == 1
+    assert kills.read_text() == "0"
+
+
 @dask_mark
 def test_a_dask_worker_lost_under_a_solve_is_retried_on_another(tmp_path, scheduler):
     """SIGKILL of the Dask worker running a solve (a machine lost mid-task): the scheduler gives
