@@ -85,8 +85,7 @@ def group_distances(centre: np.ndarray, groups: np.ndarray) -> np.ndarray:
     dist = np.zeros((count, count))
     for h in range(count):
         nearest = cKDTree(centre[groups == h]).query(centre[by_group])[0]
-        dist[:, h] = np.minimum.reduceat(nearest, firsts)
-    dist = np.minimum(dist, dist.T)
+        dist[:, h] = np.minimum.reduceat(nearest, firsts)  # symmetric: the same nearest pair
     np.fill_diagonal(dist, 0.0)
     return dist
 
@@ -149,26 +148,20 @@ def group_chain(centre: np.ndarray, groups: np.ndarray, order: np.ndarray) -> np
     for j, inside in enumerate(members):
         after = members[(j + 1) % len(members)]
         pts = centre[inside]
-        leave = int(inside[np.argmin(cKDTree(centre[after]).query(pts)[0])])
-        if leave == entry:
-            leave = -1  # the chain ends where the nearest-next rule takes it
+        first = int(np.flatnonzero(inside == entry)[0])  # positions within the group
+        last = int(np.argmin(cKDTree(centre[after]).query(pts)[0]))
         left = np.ones(len(inside), dtype=bool)
-        left[np.flatnonzero(inside == entry)] = False
-        if leave >= 0:
-            left[np.flatnonzero(inside == leave)] = False
-        at = entry
-        tour.append(at)
+        left[[first, last]] = False  # where last == first, the chain ends where it ends
+        chain = [first]
         while left.any():
             free = np.flatnonzero(left)
-            nxt = free[np.argmin(np.hypot(*(pts[free] - centre[at]).T))]
-            left[nxt] = False
-            at = int(inside[nxt])
-            tour.append(at)
-        if leave >= 0:
-            tour.append(leave)
-            at = leave
-        if j + 1 < len(members):
-            entry = int(after[np.argmin(np.hypot(*(centre[after] - centre[at]).T))])
+            at = int(free[np.argmin(np.hypot(*(pts[free] - pts[chain[-1]]).T))])
+            left[at] = False
+            chain.append(at)
+        if last != first:
+            chain.append(last)
+        tour.extend(inside[chain].tolist())
+        entry = int(after[np.argmin(np.hypot(*(centre[after] - pts[chain[-1]]).T))])
     return np.array(tour, dtype=np.int64)
 
 
