@@ -1,10 +1,9 @@
-"""lns on several threads: the islands' rule and starts, the merged answer, split sub-path passes."""
+"""lns on several threads: the islands' rule and starts, the merged answer, the end phase."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Run, _Search
 from gtsp_bench.solvers.heuristics.lns_islands import (
@@ -13,8 +12,7 @@ from gtsp_bench.solvers.heuristics.lns_islands import (
     island_kinds,
     merge,
 )
-from gtsp_bench.solvers.heuristics.lns_paths import region_windows, split_path_passes
-from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after
+from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
@@ -89,35 +87,6 @@ def test_two_workers_on_a_large_cycle(exchange):
     problem = price(inst, 0.5)
     greedy = problem.tour_cost(np.array(greedy_tour(problem, anchor_node(problem))))
     assert r.objective <= greedy
-
-
-@pytest.mark.parametrize("lo, size, length", [(0, 400, 150), (37, 301, 150), (5, 9, 150),
-                                              (3, 160, 4)])
-def test_region_windows_stay_off_the_last_position(lo, size, length):
-    """A region's windows cover each of its positions but the last, never reach past it, and
-    hold at least 2 and at most ``length`` clusters."""
-    windows = region_windows(lo, size, length)
-    covered = set()
-    for first, count in windows:
-        assert 2 <= count <= length and first >= lo and first + count <= lo + size - 1
-        covered.update(range(first, first + count))
-    assert covered == set(range(lo, lo + size - 1))
-    assert region_windows(0, 2, 150) == []
-
-
-def test_split_passes_never_make_the_tour_worse():
-    """Two threads sweeping their halves of a greedy tour for a second: a valid tour, the saving
-    is what the tour lost, and windows were solved."""
-    inst = generate_instance(40, 3, seed=4)
-    problem = price(inst, 0.5)
-    tour = np.array(greedy_tour(problem, anchor_node(problem)), dtype=np.int64)
-    cost = problem.tour_cost(tour)
-    kernels.seed(2)
-    saved, windows = split_path_passes(problem, tour, 12, 2, deadline_after(1.0),
-                                       np.random.default_rng(0), 2)
-    assert windows > 0 and saved >= 0.0
-    assert sorted(problem.cluster_of[tour].tolist()) == list(range(problem.n_clusters))
-    assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
 
 
 @pytest.mark.parametrize("options, message", [

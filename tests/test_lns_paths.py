@@ -1,4 +1,4 @@
-"""Sub-path re-solves of lns: the path between fixed ends, exact on small runs, passes, the option."""
+"""Region re-solves of lns: one path and two strands solved exactly, regions, passes, the option."""
 
 from __future__ import annotations
 
@@ -8,8 +8,14 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings
-from gtsp_bench.solvers.heuristics.lns_paths import improve_path, path_cost, path_passes
+from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns_paths import (
+    Regions,
+    crossings,
+    improve_region,
+    path_cost,
+    region_passes,
+)
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
 from gtsp_bench.energy import evaluate
@@ -41,8 +47,9 @@ def _valid(problem: Problem, tour: np.ndarray) -> bool:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_a_short_path_is_solved_exactly(seed):
-    """Four clusters between fixed ends (UAV costs, node costs included): the re-solved path is
-    the brute-force optimum, never below it; only those positions change; the saving is exact."""
+    """A region of four consecutive clusters (UAV costs, node costs included) is one path between
+    fixed ends: re-solved to the brute-force optimum, never below it; only those positions change;
+    the saving is exact."""
     problem, tour = _problem(9, seed)
     n, lo, length = len(tour), 3, 4
     a, b = int(tour[lo - 1]), int(tour[lo + length])
@@ -50,7 +57,7 @@ def test_a_short_path_is_solved_exactly(seed):
     optimum = _best_path(problem, a, clusters, b)
     before, cost = tour.copy(), problem.tour_cost(tour)
     kernels.seed(seed)
-    saved = improve_path(problem, tour, lo, length, 5)
+    saved = improve_region(problem, tour, np.arange(lo, lo + length), 5)
     assert _valid(problem, tour)
     assert path_cost(problem, tour[lo - 1:lo + length + 1]) == pytest.approx(optimum, rel=1e-9)
     assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
@@ -58,36 +65,115 @@ def test_a_short_path_is_solved_exactly(seed):
     assert np.array_equal(tour[outside], before[outside])
 
 
-def test_a_window_across_the_end_of_the_array():
-    """A run that wraps round the end of the tour array is re-solved in place, cyclically."""
+def test_a_region_across_the_end_of_the_array():
+    """A run that wraps round the end of the tour array is re-solved cyclically."""
     problem, tour = _problem(12, 7)
     n = len(tour)
     cost = problem.tour_cost(tour)
     kernels.seed(1)
-    saved = improve_path(problem, tour, n - 3, 6, 0)
+    saved = improve_region(problem, tour, np.arange(n - 3, n + 3) % n, 0)
     assert _valid(problem, tour)
     assert saved >= 0.0
     assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
 
 
-def test_passes_never_make_the_tour_worse():
-    """Two passes of half-overlapping windows over a greedy tour: valid, cheaper or the same, never
-    below the DP's proven optimum, and the saving is what the tour lost."""
+def _best_with_parts(problem: Problem, parts: list[np.ndarray], clusters: list[int]) -> float:
+    """Brute force: the cheapest tour that keeps each of ``parts`` (node ids) in one piece,
+    forwards or backwards, and visits one node of each of ``clusters`` in any order."""
+    items = [("part", k) for k in range(1, len(parts))] + [("cluster", c) for c in clusters]
+    best = np.inf
+    for order in itertools.permutations(items):
+        for flips in itertools.product((False, True), repeat=len(parts) - 1):
+            for heads in itertools.product(*(problem.clusters[c] for c in clusters)):
+                chosen = dict(zip(clusters, heads, strict=True))
+                seq = list(parts[0])
+                for kind, x in order:
+                    if kind == "part":
+                        seq.extend(parts[x][::-1] if flips[x - 1] else parts[x])
+                    else:
+                        seq.append(chosen[x])
+                best = min(best, problem.tour_cost(np.array(seq)))
+    return best
+
+
+def _pieces(tour: np.ndarray, part: np.ndarray) -> bool:
+    """Whether ``part`` (node ids) lies in ``tour`` in one piece, forwards or backwards."""
+    n, k = len(tour), len(part)
+    at = int(np.flatnonzero(tour == part[0])[0])
+    ahead = tour[(at + np.arange(k)) % n]
+    behind = tour[(at - np.arange(k)) % n]
+    return bool(np.array_equal(ahead, part) or np.array_equal(behind, part))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_region_of_two_strands_is_solved_exactly(seed):
+    """A region the tour crosses twice (positions 2-3 and 6-7 of 10): its four clusters, and how
+    the two strands join the two outside parts, re-solved to the brute-force optimum over every
+    tour that keeps those parts in one piece; the parts stay whole; the saving is exact."""
+    problem, tour = _problem(9, seed)
+    assert len(tour) == 10  # nine clusters and the depot's
+    parts = [tour[[4, 5]].copy(), tour[[8, 9, 0, 1]].copy()]
+    clusters = problem.cluster_of[tour[[2, 3, 6, 7]]].tolist()
+    optimum = _best_with_parts(problem, parts, clusters)
+    cost = problem.tour_cost(tour)
+    kernels.seed(seed)
+    saved = improve_region(problem, tour, np.array([2, 3, 6, 7]), 5)
+    assert _valid(problem, tour)
+    assert problem.tour_cost(tour) == pytest.approx(optimum, rel=1e-9)
+    assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
+    assert all(_pieces(tour, part) for part in parts)
+    assert np.array_equal(tour[[4, 5]], parts[0])  # the first outside part keeps its positions
+
+
+def test_crossings_alternate_and_absorb_short_parts():
+    """Outside parts and inside runs alternate in cycle order from an outside part; a part of one
+    position joins the region; a region of the whole cycle has none."""
+    inside = np.zeros(12, dtype=np.bool_)
+    inside[[0, 1, 5, 7, 8]] = True
+    pairs = crossings(inside)
+    assert [(p.tolist(), r.tolist()) for p, r in pairs] == [([2, 3, 4], [5, 6, 7, 8]),
+                                                            ([9, 10, 11], [0, 1])]
+    assert inside[6]  # the one-position part between 5 and 7 joined the region
+    assert crossings(np.ones(5, dtype=np.bool_)) == []
+    almost = np.ones(6, dtype=np.bool_)
+    almost[3] = False  # one outside position: it joins, nothing is left outside
+    assert crossings(almost) == []
+
+
+def test_regions_by_centres_and_by_neighbour_lists():
+    """With centres a region is the clusters nearest the cluster's centre; without, the
+    clusters met breadth-first over the neighbour lists; never more than there are."""
+    rng = np.random.default_rng(3)
+    centre = rng.random((30, 2))
+    near = np.array([np.argsort(np.hypot(*(centre - centre[c]).T))[1:5] for c in range(30)])
+    by_centre = Regions(near, centre).around(7, 6)
+    assert sorted(by_centre.tolist()) == sorted(np.argsort(np.hypot(*(centre - centre[7]).T))[:6].tolist())
+    ring = np.array([[(c + 1) % 10, (c - 1) % 10] for c in range(10)])
+    assert Regions(ring).around(0, 5).tolist() == [0, 1, 9, 2, 8]
+    assert sorted(Regions(ring).around(4, 50).tolist()) == list(range(10))
+
+
+def test_region_passes_never_make_the_tour_worse():
+    """Two passes of regions over a greedy tour: ``2 x ceil(2 n / size)`` regions, a valid tour,
+    cheaper or the same, never below the DP's proven optimum, and the saving is what the tour
+    lost."""
     inst = generate_instance(11, 3, seed=4)
     optimum = run_solver("dp", inst, 0.5).objective
     problem = price(inst, 0.5)
     tour = np.array(greedy_tour(problem, anchor_node(problem)), dtype=np.int64)
     cost = problem.tour_cost(tour)
     kernels.seed(2)
-    saved, windows = path_passes(problem, tour, 6, 5, None, np.random.default_rng(0), passes=2)
-    assert windows == 2 * len(range(0, len(tour), 3))
+    near = _Search(problem, LnsSettings(neighbours=4), np.random.default_rng(0)).near
+    saved, regions = region_passes(problem, tour, Regions(near), 6, 5, None,
+                                   np.random.default_rng(0), passes=2)
+    assert regions == 2 * 4  # ceil(2 * 12 / 6) regions a pass
     assert _valid(problem, tour)
     assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
     assert problem.tour_cost(tour) >= optimum - 1e-9 * optimum
 
 
-def test_default_run_ends_with_sub_paths_above_large():
-    """By default a time-limited run above LARGE clusters keeps the end of its budget for sub-path
+def test_default_run_ends_with_regions_above_large():
+    """By default a time-limited run above LARGE clusters keeps the end of its budget for region
     re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
     with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off."""
     assert LnsSettings().fail_passes == 0
@@ -103,22 +189,22 @@ def test_default_run_ends_with_sub_paths_above_large():
 
 
 @pytest.mark.parametrize("n, symmetric, options, timed, share", [
-    (LARGE + 1, True, {}, True, 0.15),
-    (LARGE + 1, True, {"paths": 0.3}, True, 0.3),
+    (LARGE + 1, True, {}, True, 0.3),
+    (LARGE + 1, True, {"paths": 0.15}, True, 0.15),
     (LARGE, True, {}, True, 0.0),  # up to LARGE clusters: never
     (LARGE + 1, False, {}, True, 0.0),  # directed costs: never
     (LARGE + 1, True, {}, False, 0.0),  # no time limit
     (LARGE + 1, True, {"stop_at_convergence": True}, True, 0.0),
     (LARGE + 1, True, {"paths": 0.0}, True, 0.0),
 ])
-def test_share_of_the_budget_for_sub_paths(n, symmetric, options, timed, share):
-    """The end phase's share: ``paths`` (default 0.15) above LARGE clusters on symmetric costs in
+def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
+    """The end phase's share: ``paths`` (default 0.3) above LARGE clusters on symmetric costs in
     a time-limited run that does not stop at convergence, else none."""
     assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
 
 
 def test_paths_option_on_a_large_cycle():
-    """Above LARGE clusters with paths=0.5 the end of the budget re-solves sub-paths: a valid
+    """Above LARGE clusters with paths=0.5 the end of the budget re-solves regions: a valid
     tour, priced as the evaluator prices it, and the windows counted in the stats."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
@@ -131,7 +217,7 @@ def test_paths_option_on_a_large_cycle():
 
 def test_fail_passes_on_a_large_cycle():
     """Above LARGE clusters with fail_passes=1 a trial that did not improve its base is followed
-    by a pass of sub-path re-solves over the base: a valid tour, priced as the evaluator prices
+    by a pass of region re-solves over the base: a valid tour, priced as the evaluator prices
     it, and the windows counted in the stats (short trials, so that some fail)."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
@@ -161,6 +247,6 @@ def test_paths_leave_small_instances_alone():
     ({"fail_passes": -1}, "fail_passes must be an integer >= 0"),
 ])
 def test_bad_options_rejected(options, message):
-    """Invalid sub-path settings raise InputError naming the setting."""
+    """Invalid region settings raise InputError naming the setting."""
     with pytest.raises(InputError, match=message):
         get_solver("lns", **options)

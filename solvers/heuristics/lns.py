@@ -28,7 +28,8 @@ windowed re-opt, sampled removals and reversing or-opt of
 :mod:`gtsp_bench.solvers.heuristics.lns_window`, and the neighbour lists take the nearest clusters of
 each quadrant (``quadrants``); on large planar instances the edge costs come from the coordinates
 (``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, the last
-``paths`` share of the budget (0.15) re-solves sub-paths of the best tour
+``paths`` share of the budget (0.3) re-solves regions of the best tour: the clusters nearest a
+random one, with the tour's paths through them
 (:mod:`gtsp_bench.solvers.heuristics.lns_paths`), and ``fail_passes`` (off by default) does so
 after each trial that did not improve its start. With a time limit above ``LARGE`` clusters the
 search runs on ``workers`` threads, two where the cores allow
@@ -59,7 +60,7 @@ from gtsp_bench.solvers.heuristics.lns_macro import (
     cluster_centres,
     macro_tour,
 )
-from gtsp_bench.solvers.heuristics.lns_paths import path_passes, split_path_passes
+from gtsp_bench.solvers.heuristics.lns_paths import Regions, region_passes
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
 from gtsp_bench.checks import (
@@ -114,8 +115,8 @@ class LnsSettings:
     macro_groups: float = 5.0
     starts: int = 1
     start_iterations: int = 5
-    paths: float = 0.15
-    path_clusters: int = 150
+    paths: float = 0.3
+    path_clusters: int = 80
     path_iterations: int = 5
     fail_passes: int = 0
     workers: int | None = None
@@ -207,7 +208,7 @@ class LnsSettings:
         return 0 if n <= LARGE else 4
 
     def path_share_for(self, n: int, symmetric: bool, timed: bool) -> float:
-        """The share of the budget kept at the end for sub-path re-solves of a cycle of ``n``
+        """The share of the budget kept at the end for region re-solves of a cycle of ``n``
         clusters: ``paths`` above ``LARGE`` clusters on symmetric costs in a run with a time limit
         (``timed``) that does not ``stop_at_convergence``, else 0."""
         applies = n > LARGE and symmetric and timed and not self.stop_at_convergence
@@ -245,7 +246,7 @@ class _Run:
     trials: int = 0
     converged: bool = False
     timed_out: bool = False
-    windows: int = 0  #: sub-paths re-solved (``fail_passes``)
+    windows: int = 0  #: regions re-solved (``paths``, ``fail_passes``)
     window_saving: float = 0.0
 
 
@@ -276,10 +277,12 @@ class _Search:
             self.near = kernels.neighbours(self.edge, self.start, count, self.centre)
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
+        #: The regions of the end phase and ``fail_passes`` (:meth:`polish`).
+        self.regions = Regions(self.near, self.centre) if self.windowed else None
 
     @property
     def windowed(self) -> bool:
-        """Whether sub-path re-solves apply (``paths``, ``fail_passes``): above ``LARGE``
+        """Whether region re-solves apply (``paths``, ``fail_passes``): above ``LARGE``
         clusters, on symmetric costs."""
         return self.p.n_clusters > LARGE and self.symmetric
 
@@ -425,15 +428,29 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.fail_passes and self.windowed:  # re-solve the base's sub-paths
-                    saved, count = path_passes(p, base, s.path_clusters, s.path_iterations,
-                                               deadline, rng, s.fail_passes)
-                    run.windows, run.window_saving = run.windows + count, run.window_saving + saved
+                if s.fail_passes and self.windowed:  # re-solve the base's regions
+                    saved = self.polish(run, base, deadline, rng, s.fail_passes)
                     if saved > 0.0:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                             run.best, run.best_cost = base.copy(), base_cost
             run.converged = run.converged or run.trials >= s.trials
+
+    def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
+               rng: np.random.Generator, passes: int | None = None) -> float:
+        """Region re-solves of ``tour`` (changed in place; ``path_clusters`` clusters each,
+        :func:`~gtsp_bench.solvers.heuristics.lns_paths.region_passes`) until ``deadline`` or
+        ``passes`` passes, counted in ``run``'s stats; returns the saving."""
+        assert self.regions is not None
+        saved, count = region_passes(self.p, tour, self.regions, self.s.path_clusters,
+                                     self.s.path_iterations, deadline, rng, passes)
+        run.windows, run.window_saving = run.windows + count, run.window_saving + saved
+        return saved
+
+    def finish(self, run: _Run, deadline: float, rng: np.random.Generator) -> None:
+        """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``."""
+        self.polish(run, run.best, deadline, rng)
+        run.best_cost = self.p.tour_cost(run.best)
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
         """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
@@ -443,16 +460,18 @@ class _Search:
         final = deadline
         timed = deadline is not None
         tail = s.path_share_for(p.n_clusters, self.symmetric, timed)
-        if tail > 0.0:  # the trials stop early; the rest of the budget re-solves sub-paths
+        if tail > 0.0:  # the trials stop early; the rest of the budget re-solves regions
             clock0 = time.perf_counter()
             deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
         workers = s.workers_for(p.n_clusters, timed)
         islands: list[float] = []
-        if workers > 1:
-            run, islands = run_islands(self, workers, deadline)
+        if workers > 1:  # each island re-solves regions of its own best at the end
+            run, islands = run_islands(self, workers, deadline, final if tail > 0.0 else None)
         else:
             run = self.first(deadline)
             self.trials(run, deadline, self.rng)
+            if tail > 0.0:
+                self.finish(run, final, self.rng)
         weights = dict(zip(REMOVALS, run.weights_r, strict=True))
         weights.update(zip(INSERTIONS, run.weights_i, strict=True))
         stats = {"iterations": run.done, "trials": run.trials, "best_at": run.best_at,
@@ -460,15 +479,6 @@ class _Search:
                  "weights": {k: round(float(w), 3) for k, w in weights.items()}}
         if workers > 1:
             stats.update(workers=workers, island_costs=[round(c, 6) for c in islands])
-        if tail > 0.0:  # the rest of the budget re-solves sub-paths of the best tour
-            if workers > 1:
-                saved, count = split_path_passes(p, run.best, s.path_clusters, s.path_iterations,
-                                                 final, self.rng, workers)
-            else:
-                saved, count = path_passes(p, run.best, s.path_clusters, s.path_iterations, final,
-                                           self.rng)
-            run.windows, run.window_saving = run.windows + count, run.window_saving + saved
-            run.best_cost = p.tour_cost(run.best)
         if run.windows:
             stats.update(windows=run.windows, window_saving=round(run.window_saving, 6))
         return run.best, run.best_cost, stats, run.timed_out and not run.converged
@@ -561,26 +571,28 @@ class Lns:
     start_iterations
         Iterations per cluster of each raced start's trial (>= 1, at least 100 in all).
     paths
-        Share of the time limit, in [0, 1], kept for sub-path re-solves of the best tour at the
+        Share of the time limit, in [0, 1], kept for region re-solves of the best tour at the
         end (above ``LARGE`` clusters, symmetric costs, with a time limit and without
-        ``stop_at_convergence``; default 0.15, 0: none): runs
-        of ``path_clusters`` consecutive clusters between their fixed neighbours, each re-solved
-        as a small GTSP by these kernels and put back when cheaper, half-overlapping windows from
-        random offsets until the limit (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
+        ``stop_at_convergence``; default 0.3, 0: none): the ``path_clusters`` clusters nearest
+        a random cluster (by their centres on planar instances, else along the neighbour lists),
+        the tour's paths through them re-solved together as a small GTSP by these kernels (the
+        parts of the tour outside fixed) and put back when cheaper, region after region until the
+        limit (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     path_clusters
-        Clusters per sub-path (>= 2; default 150).
+        Clusters per region (>= 2; default 80).
     path_iterations
-        Iterations per cluster of a sub-path's annealing trial (>= 0; default 5; 0: its local
+        Iterations per cluster of a region's annealing trial (>= 0; default 5; 0: its local
         search only).
     fail_passes
         Above ``LARGE`` clusters on symmetric costs, after each trial that did not improve the
-        tour it started from, this many passes of sub-path re-solves (as ``paths``) over that
-        tour before the next trial (>= 0; default 0: none).
+        tour it started from, this many passes of region re-solves (as ``paths``; a pass is
+        ``2 n / path_clusters`` regions) over that tour before the next trial (>= 0; default 0:
+        none).
     workers
         Threads of a time-limited search above ``LARGE`` clusters (>= 1; default: 2 where the
         process may run on two cores and ``OMP_NUM_THREADS`` is not 1, else 1): the trials run as
-        islands from different first tours and the end phase's sub-paths on disjoint halves of
-        the tour (:mod:`gtsp_bench.solvers.heuristics.lns_islands`). Up to ``LARGE`` clusters, and
+        islands from different first tours, and in the end phase each island re-solves regions
+        of its own best tour (:mod:`gtsp_bench.solvers.heuristics.lns_islands`). Up to ``LARGE`` clusters, and
         with ``stop_at_convergence``, one thread: the same run as before, reproducible.
     exchange
         With ``workers`` > 1, the share of the trials' time after which every island goes on from
@@ -598,7 +610,7 @@ class Lns:
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
         start_iterations: int = 5,
-        paths: float = 0.15, path_clusters: int = 150, path_iterations: int = 5,
+        paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
         fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,

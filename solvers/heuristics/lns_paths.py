@@ -1,33 +1,36 @@
-"""Sub-path re-solves for :mod:`gtsp_bench.solvers.heuristics.lns` on large cycles (POPMUSIC-style).
+"""Region re-solves for :mod:`gtsp_bench.solvers.heuristics.lns` on large cycles (POPMUSIC-style).
 
-A run of ``r`` consecutive clusters of a tour, between the fixed nodes ``a`` just before it and
-``b`` just after it, is a small path-GTSP: which node of each cluster, in which order, from ``a``
-to ``b``. :func:`improve_path` solves it with lns's own kernels as a small symmetric GTSP cycle:
-``a`` and ``b`` become two singleton clusters joined by an edge of cost 0, every other edge at
-``a`` or ``b`` costs ``M`` more (``M`` = the current path's cost). A cycle with ``a`` and ``b``
-adjacent then costs its path plus ``2 M``, any other at least ``4 M`` (costs are not negative),
-so the search, starting from the current path, never leaves the adjacent cycles' side. The
-sub-path is re-solved by a local search and one annealing trial (temperatures from the path's
-mean edge), and replaces the run when cheaper. :func:`path_passes` sweeps half-overlapping
-windows from random offsets over the tour until a deadline.
+A **region** is a set of a tour's clusters. The tour crosses it in one or more paths; the parts of
+the tour outside it keep their nodes and their order. Which node of each region cluster, and how
+the paths run through the region, is then a small symmetric GTSP, which :func:`improve_region`
+solves with lns's own kernels as a cycle: each of the ``s`` outside parts is an edge of cost 0
+between its two end nodes (two singleton clusters), and every other edge at an end node costs
+``M`` more (``M`` = the cost of the region's current paths). A cycle that keeps every outside part
+costs its paths plus ``2 s M``, any other at least ``(2 s + 2) M``, so the search, starting from
+the current paths, never drops a part; putting the parts back in place of their edges, forwards or
+backwards, gives a tour. The sub-problem is re-solved by a local search and one annealing trial
+(temperatures from the paths' mean edge), and replaces the paths when cheaper.
 
-On the large files lns's tours are order-optimal for their heads within a few tenths of a point,
-but a joint re-choice of heads and order over 100-200 consecutive clusters still finds savings
-that more trials of the whole tour do not (docs/notes/lns-vs-glns.md, eighth session).
+:func:`region_passes` re-solves regions of the ``size`` clusters nearest a random cluster
+(:class:`Regions`) until a deadline. On the drilling files (2370rl11849, 3023d15112) lns's tours
+are order-optimal for their heads and head-optimal for their order, and no run of up to 11
+consecutive clusters re-solved exactly improves them; their excess over GLKH's tours lies in how
+the strands through small areas are joined, which a region re-solve reorders and a run of
+consecutive clusters (a single path) cannot (docs/notes/lns-vs-glns.md, 2026-11-27).
 """
 
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.local_search import is_past
+from scipy.spatial import cKDTree
 
 from gtsp_bench.problem import Problem
 
-#: Neighbour-list length inside a sub-path problem (lns's default on symmetric costs).
+#: Neighbour-list length inside a region's sub-problem (lns's default on symmetric costs).
 NEIGHBOURS = 10
 
 
@@ -37,19 +40,37 @@ def path_cost(problem: Problem, nodes: np.ndarray) -> float:
                  + problem.edge_costs(nodes[:-1], nodes[1:]).sum())
 
 
-def improve_path(problem: Problem, tour: np.ndarray, lo: int, length: int, iterations: int,
-                 temperature: float = 1.0) -> float:
-    """Re-solve the run of ``length`` clusters at positions ``lo, lo + 1, ...`` (cyclic) of the
-    cycle ``tour`` (node ids, one per cluster) between its fixed neighbours; ``tour`` is changed in
-    place when that saves anything (beyond a relative 1e-9). Needs symmetric, non-negative costs
-    and ``length <= len(tour) - 2``.
+def crossings(inside: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A cycle's positions as (outside part, inside run) pairs in cycle order, ``inside`` marking
+    the region's positions; an outside part shorter than two positions joins the region
+    (``inside`` is changed in place). Empty when the region takes the whole cycle."""
+    n = len(inside)
+    while not inside.all():
+        first = int(np.flatnonzero(~inside & np.roll(inside, 1))[0])  # an outside part starts here
+        cycle = (first + np.arange(n)) % n
+        flags = inside[cycle]
+        runs = np.split(cycle, np.flatnonzero(flags[1:] != flags[:-1]) + 1)
+        short = [part for part in runs[0::2] if len(part) < 2]
+        if not short:
+            return list(zip(runs[0::2], runs[1::2], strict=True))
+        inside[np.concatenate(short)] = True
+    return []
+
+
+def improve_region(problem: Problem, tour: np.ndarray, positions: np.ndarray, iterations: int,
+                   temperature: float = 1.0) -> float:
+    """Re-solve the region at ``positions`` of the cycle ``tour`` (node ids, one per cluster; an
+    outside part shorter than two clusters joins the region); ``tour`` is changed in place when
+    that saves anything (beyond a relative 1e-9), the first outside part keeping its positions.
+    Needs symmetric, non-negative costs; a region of more than ``len(tour) - 2`` clusters is left
+    alone.
 
     Parameters
     ----------
     iterations
         Iterations per cluster of the annealing trial (0: the local search only).
     temperature
-        The trial's start temperature as a multiple of the path's mean edge (ends at 0.003 times).
+        The trial's start temperature as a multiple of the paths' mean edge (ends at 0.003 times).
 
     Returns
     -------
@@ -57,38 +78,47 @@ def improve_path(problem: Problem, tour: np.ndarray, lo: int, length: int, itera
         The saving (0.0 when nothing changed).
     """
     n = len(tour)
-    pos = (lo + np.arange(length)) % n
-    a, b = int(tour[(lo - 1) % n]), int(tour[(lo + length) % n])
-    xs = tour[pos]
-    old = path_cost(problem, np.concatenate([[a], xs, [b]]))
+    inside = np.zeros(n, dtype=np.bool_)
+    inside[positions] = True
+    pairs = crossings(inside) if inside.sum() <= n - 2 else []
+    if not pairs:
+        return 0.0
+    s = len(pairs)
+    old = sum(path_cost(problem, np.concatenate([[tour[part[-1]]], tour[run],
+                                                 [tour[pairs[(k + 1) % s][0][0]]]]))
+              for k, (part, run) in enumerate(pairs))
     if not old > 0.0:
         return 0.0
+    ends = np.array([[tour[part[0]], tour[part[-1]]] for part, _ in pairs], dtype=np.int64).ravel()
+    xs = tour[np.concatenate([run for _, run in pairs])]
     groups = [np.asarray(problem.clusters[c], dtype=np.int64) for c in problem.cluster_of[xs]]
-    nodes = np.concatenate([np.array([a, b], dtype=np.int64), *groups])
-    sizes = np.array([1, 1] + [len(g) for g in groups], dtype=np.int64)
+    nodes = np.concatenate([ends, *groups])
+    sizes = np.array([1] * (2 * s) + [len(g) for g in groups], dtype=np.int64)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     cluster_of = np.repeat(np.arange(len(sizes), dtype=np.int64), sizes)
-    m = len(nodes)
+    m, e = len(nodes), 2 * s
     edge = problem.edge_costs(np.repeat(nodes, m), np.tile(nodes, m)).reshape(m, m)
     np.fill_diagonal(edge, 0.0)
-    big = old  # a cycle with a, b apart costs >= 4 big > 2 big + old
-    edge[:2, :] += big
-    edge[:, :2] += big
-    edge[0, 0] = edge[1, 1] = edge[0, 1] = edge[1, 0] = 0.0
+    big = old  # a cycle without some outside part costs >= (2 s + 2) big > 2 s big + old
+    edge[:e, :] += big
+    edge[:, :e] += big
+    edge[np.arange(0, e, 2), np.arange(1, e, 2)] = 0.0
+    edge[np.arange(1, e, 2), np.arange(0, e, 2)] = 0.0
     edge = np.ascontiguousarray(edge)
     edge.setflags(write=False)  # as lns's own matrices: one compiled kind
     node = np.array(problem.node_cost[nodes], dtype=np.float64)
-    node[:2] = 0.0
+    node[:e] = 0.0
     node.setflags(write=False)
-    index = {int(v): j for j, v in enumerate(nodes)}  # nodes are distinct: one cluster each
-    t = np.array([0] + [index[int(v)] for v in xs] + [1], dtype=np.int64)
+    index = {int(v): j for j, v in enumerate(nodes[e:], start=e)}  # one cluster each: distinct
+    t = np.array([j for k, (_, run) in enumerate(pairs)
+                  for j in (2 * k, 2 * k + 1, *(index[int(v)] for v in tour[run]))], dtype=np.int64)
     k = len(sizes)
     near = kernels.neighbours(edge, start, NEIGHBOURS)
-    tol = kernels.REL_TOL * (old + 2 * big)
+    tol = kernels.REL_TOL * (old + e * big)
     cost = kernels.local_search(t, edge, node, start, near, cluster_of, tol,
                                 np.ones(k, dtype=np.bool_), True)
     if iterations > 0:
-        mean = old / (length + 1)
+        mean = old / (len(xs) + s)
         count = max(100, iterations * k)
         settings = kernels.trial_settings(count, count, temperature * mean, 0.003 * mean,
                                           max(1, min(k - 2, 100, math.ceil(0.3 * k))),
@@ -97,95 +127,83 @@ def improve_path(problem: Problem, tour: np.ndarray, lo: int, length: int, itera
                                                      near, cluster_of, True, None)
         if best_cost < cost:
             t, cost = best, best_cost
-    new = cost - 2 * big
-    if not new < old - 1e-9 * old:
+    if not cost - e * big < old - 1e-9 * old:
         return 0.0
-    cyc = list(t)
-    z = cyc.index(0)
-    cyc = cyc[z:] + cyc[:z]
-    if cyc[1] == 1:  # 0 -> 1 -> path backwards -> 0
-        cyc = [0, *cyc[1:][::-1]]
-    assert cyc[-1] == 1, "the fixed ends came apart"
-    path = nodes[np.array(cyc[1:-1], dtype=np.int64)]
-    saved = old - path_cost(problem, np.concatenate([[a], path, [b]]))
+    new = _spliced(list(t), pairs, nodes, tour)
+    saved = problem.tour_cost(tour) - problem.tour_cost(new)
     if not saved > 1e-9 * old:
         return 0.0
-    tour[pos] = path
+    tour[:] = np.roll(new, int(pairs[0][0][0]))  # the first outside part back at its positions
     return saved
 
 
-def path_passes(problem: Problem, tour: np.ndarray, length: int, iterations: int,
-                deadline: float | None, rng: np.random.Generator, passes: int | None = None
-                ) -> tuple[float, int]:
-    """Sweep :func:`improve_path` over ``tour`` (changed in place): windows of ``length`` clusters
-    (at most ``len(tour) - 2``) every ``length // 2`` positions from a random offset, a new offset
-    each pass, until ``deadline`` (checked before each window) or ``passes`` passes. Returns (the
-    saving, the windows solved)."""
+def _spliced(cycle: list[int], pairs: list[tuple[np.ndarray, np.ndarray]], nodes: np.ndarray,
+             tour: np.ndarray) -> np.ndarray:
+    """The tour of a sub-problem ``cycle`` (indices into ``nodes``) that keeps every outside part:
+    each part's two end indices replaced by the part, forwards or backwards; it starts with the
+    first part, forwards."""
+    z = cycle.index(0)
+    cycle = cycle[z:] + cycle[:z]
+    if cycle[1] != 1:  # 0 -> its partner 1 backwards round the cycle
+        cycle = [0, *cycle[1:][::-1]]
+    out, i, e = [], 0, 2 * len(pairs)
+    while i < len(cycle):
+        j = cycle[i]
+        if j < e:
+            assert cycle[i + 1] == j ^ 1, "an outside part came apart"
+            part = tour[pairs[j // 2][0]]
+            out.extend(part if j % 2 == 0 else part[::-1])
+            i += 2
+        else:
+            out.append(int(nodes[j]))
+            i += 1
+    return np.array(out, dtype=np.int64)
+
+
+class Regions:
+    """Regions of a cycle's clusters: the ``size`` clusters nearest a cluster, by the distance
+    between their centres (a k-d tree) where ``centre`` is given, else in breadth-first order over
+    the neighbour lists ``near`` (fewer where those do not reach ``size`` clusters)."""
+
+    def __init__(self, near: np.ndarray, centre: np.ndarray | None = None) -> None:
+        self.near = near
+        self.centre = centre
+        self.tree = None if centre is None else cKDTree(centre)
+
+    def around(self, c: int, size: int) -> np.ndarray:
+        """The clusters of the region round cluster ``c`` (``c`` among them)."""
+        size = min(size, len(self.near))
+        if self.tree is not None:
+            return np.atleast_1d(self.tree.query(self.centre[c], k=size)[1])
+        seen, queue, head = {c}, [c], 0
+        while len(queue) < size and head < len(queue):
+            for x in self.near[queue[head]]:
+                if int(x) not in seen:
+                    seen.add(int(x))
+                    queue.append(int(x))
+            head += 1
+        return np.array(queue[:size], dtype=np.int64)
+
+
+def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
+                  iterations: int, deadline: float | None, rng: np.random.Generator,
+                  passes: int | None = None) -> tuple[float, int]:
+    """Re-solve regions of ``size`` clusters (at most ``len(tour) - 2``) round random clusters of
+    ``tour`` (changed in place; :func:`improve_region`) until ``deadline`` (checked before each
+    region) or ``passes`` passes of ``ceil(2 n / size)`` regions (no deadline and no ``passes``:
+    one pass). Returns (the saving, the regions solved)."""
     n = len(tour)
-    length = min(length, n - 2)
-    if length < 2:
+    size = min(size, n - 2)
+    if size < 2:
         return 0.0, 0
-    step = max(1, length // 2)
-    saved, done, sweeps = 0.0, 0, 0
-    while passes is None or sweeps < passes:
-        offset = int(rng.integers(n))
-        for w in range(0, n, step):
-            if is_past(deadline):
-                return saved, done
-            saved += improve_path(problem, tour, offset + w, length, iterations)
-            done += 1
-        sweeps += 1
-        if deadline is None and passes is None:
-            break
+    if passes is None and deadline is None:
+        passes = 1
+    count = None if passes is None else passes * math.ceil(2 * n / size)
+    saved, done = 0.0, 0
+    pos = np.empty(n, dtype=np.int64)
+    while (count is None or done < count) and not is_past(deadline):
+        pos[problem.cluster_of[tour]] = np.arange(n)
+        around = regions.around(int(rng.integers(n)), size)
+        saved += improve_region(problem, tour, pos[around], iterations)
+        done += 1
     return saved, done
-
-
-def region_windows(lo: int, size: int, length: int) -> list[tuple[int, int]]:
-    """Windows ``(first position, clusters)`` that sweep the region of ``size`` positions from
-    ``lo`` (cyclic) and stay off its last position, which the next region's windows take as their
-    fixed start: ``length`` clusters every ``length // 2`` positions, the last one shortened."""
-    room = size - 1
-    if room < 2:
-        return []
-    length = min(length, room)
-    step = max(1, length // 2)
-    out = []
-    for w in range(0, room, step):
-        out.append((lo + w, min(length, room - w)))
-        if w + length >= room:
-            break
-    return [(first, count) for first, count in out if count >= 2]
-
-
-def split_path_passes(problem: Problem, tour: np.ndarray, length: int, iterations: int,
-                      deadline: float, rng: np.random.Generator, workers: int
-                      ) -> tuple[float, int]:
-    """:func:`path_passes` on ``workers`` threads: each pass cuts the tour at a random offset into
-    ``workers`` regions of consecutive positions and each thread sweeps the windows of its own
-    region (:func:`region_windows`). A region's windows never touch its last position, so no window
-    changes a fixed end of another's, and the threads write disjoint positions of ``tour``. Passes
-    go on until ``deadline``; returns (the saving, the windows solved)."""
-    n = len(tour)
-    seeds = rng.integers(2**31 - 1, size=workers)
-    totals = np.zeros((workers, 2))
-
-    def sweep(j: int, windows: list[tuple[int, int]], first: bool) -> None:
-        if first:
-            kernels.seed(int(seeds[j]))  # numba's random state is the thread's own
-        for lo, count in windows:
-            if is_past(deadline):
-                return
-            totals[j, 0] += improve_path(problem, tour, lo % n, count, iterations)
-            totals[j, 1] += 1
-
-    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="lns-paths") as pool:
-        first = True
-        while not is_past(deadline):
-            offset = int(rng.integers(n))
-            cuts = [offset + (n * j) // workers for j in range(workers + 1)]
-            jobs = [pool.submit(sweep, j, region_windows(cuts[j], cuts[j + 1] - cuts[j], length),
-                                first) for j in range(workers)]
-            for job in jobs:
-                job.result()
-            first = False
-    return float(totals[:, 0].sum()), int(totals[:, 1].sum())
