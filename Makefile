@@ -52,7 +52,7 @@ bench-heuristics: $(STAMP)
 # block of docs/solvers/heuristics.md; TABLE_ARGS="--time-limit 30 --per-group 5" (--help for more).
 TABLE_ARGS ?=
 bench-heuristics-table: $(STAMP)
-	$(BIN)/python -m gtsp_bench.heuristics_table $(TABLE_ARGS)
+	$(BIN)/python -m gtsp_bench.bench.heuristics_table $(TABLE_ARGS)
 
 bench-drl: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
@@ -61,7 +61,7 @@ bench-drl: $(STAMP)
 # instance (gtsp_bench/learned_table.py; LEARNED_ARGS for options, e.g. LEARNED_ARGS="--clusters 4,20").
 LEARNED_ARGS ?=
 bench-learned: $(STAMP)
-	$(BIN)/python -m gtsp_bench.learned_table $(LEARNED_ARGS)
+	$(BIN)/python -m gtsp_bench.bench.learned_table $(LEARNED_ARGS)
 
 # Train the local-view policy by imitating lns tours (the shipped checkpoints/local.pt; about 45
 # minutes on one core: labels, then 27 minutes of training). TRAIN_ARGS for more options.

@@ -34,11 +34,11 @@ import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from gtsp_bench import gtsplib
+from gtsp_bench.bench.tables import Row, solve, write_csv
+from gtsp_bench.data import gtsplib
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.tables import Row, solve, write_csv
 
 #: Node counts of the two GTSPLIB groups (symmetric instances only).
 SMALL_NODES, LARGE_NODES = 442, 1084

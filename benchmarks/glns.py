@@ -29,7 +29,7 @@ import time
 from multiprocessing import get_context
 from pathlib import Path
 
-from gtsp_bench import gtsplib
+from gtsp_bench.data import gtsplib
 from gtsp_bench.registry import get_solver, run_solver
 
 GLNS_CSV = gtsplib.folder() / "glns-45.csv"

@@ -25,13 +25,13 @@ from pathlib import Path
 
 from gtsp_bench.solvers.exact.textbook import MilpTextbook, build
 
+from gtsp_bench.bench.tables import write_csv
 from gtsp_bench.checks import parse_ks
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import SolverError
 from gtsp_bench.generator import instance_set
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
-from gtsp_bench.tables import write_csv
 
 COLUMNS = ("K", "instance", "omega", "solver", "status", "objective", "lower_bound", "runtime_s",
            "root_bound", "backend")

@@ -34,16 +34,16 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from gtsp_bench.data.io import atomic_write_text, read_instance
+from gtsp_bench.data.parse import format_json_instance
+from gtsp_bench.data.sets import ReferenceRow, read_reference, write_reference
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_AREA, DEFAULT_NODES, DEFAULT_ZETA, instance_set
-from gtsp_bench.io import atomic_write_text, read_instance
-from gtsp_bench.parse import format_json_instance
 from gtsp_bench.registry import get_solver, run_solver
-from gtsp_bench.sets import ReferenceRow, read_reference, write_reference
 
 STATUSES = ("optimal", "best_known")
-#: The omegas of the paper's experiments (gtsp_bench.runner): 0.5 at every K, 0 .. 0.9 at 4 and 7.
+#: The omegas of the paper's experiments (gtsp_bench.bench.runner): 0.5 at every K, 0 .. 0.9 at 4 and 7.
 PAPER_OMEGAS = {k: (0.5,) for k in range(5, 11)} | {
     k: tuple(round(0.1 * i, 1) for i in range(10)) for k in (4, 7)}
 LARGE_OMEGAS = (0.3, 0.5, 0.6)

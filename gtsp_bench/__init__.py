@@ -6,28 +6,41 @@ The public API needs numpy only (no torch):
 >>> result = run_solver("greedy", generate_instance(4, seed=1), omega=0.5)
 """
 
+from gtsp_bench.data.io import read_instance, read_solution, write_instance
 from gtsp_bench.energy import Energy, Evaluation, evaluate, evaluate_batch
 from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
 from gtsp_bench.generator import generate_batch, generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance, read_solution, write_instance
 from gtsp_bench.params import EnergyParams
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import (
-    Result,
-    Solution,
-    Solver,
-    get_solver,
-    register_solver,
-    run_solver,
-    solver_names,
-)
+from gtsp_bench.registry import get_solver, register_solver, run_solver, solver_names
+from gtsp_bench.solver import BatchSolver, Result, Solution, Solver
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Energy", "EnergyParams", "Evaluation", "InfeasibleSolutionError", "InputError", "Instance",
-    "Problem", "Result", "Solution", "Solver", "SolverError", "evaluate", "evaluate_batch",
-    "generate_batch", "generate_instance", "get_solver", "price", "read_instance",
-    "read_solution", "register_solver", "run_solver", "solver_names", "write_instance",
+    "BatchSolver",
+    "Energy",
+    "EnergyParams",
+    "Evaluation",
+    "InfeasibleSolutionError",
+    "InputError",
+    "Instance",
+    "Problem",
+    "Result",
+    "Solution",
+    "Solver",
+    "SolverError",
+    "evaluate",
+    "evaluate_batch",
+    "generate_batch",
+    "generate_instance",
+    "get_solver",
+    "price",
+    "read_instance",
+    "read_solution",
+    "register_solver",
+    "run_solver",
+    "solver_names",
+    "write_instance",
 ]

@@ -19,131 +19,22 @@ import inspect
 import math
 import sys
 import time
-from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 from gtsp_bench.checks import check_omega, check_seed, check_time_limit
-from gtsp_bench.energy import Energy, evaluate
+from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
 from gtsp_bench.instance import Instance
-
-#: Statuses a solution may have.
-STATUSES = ("optimal", "feasible", "time_limit", "failed")
-#: Relative tolerance between a solver's claimed objective and the evaluator's.
-REL_TOL = 1e-6
-
-
-@dataclass(frozen=True)
-class Solution:
-    """What a solver returns; :func:`run_solver` checks and re-prices it.
-
-    Attributes
-    ----------
-    order
-        Cluster indices in visiting order (depot excluded), each cluster once.
-    heads
-        ``heads[k]``: index of cluster k's head inside cluster k.
-    objective
-        The objective the solver believes this solution has; a mismatch with the evaluator
-        (relative 1e-6) is a :class:`SolverError`.
-    status
-        ``"optimal"`` (proven), ``"feasible"``, ``"time_limit"`` (stopped by the limit; the best
-        solution found) or ``"failed"``.
-    lower_bound
-        A proven lower bound on the optimum, if the solver has one.
-    stats
-        Free-form solver statistics (iterations, nodes, gap, ...).
-    """
-
-    order: tuple[int, ...]
-    heads: tuple[int, ...]
-    objective: float
-    status: str = "feasible"
-    lower_bound: float | None = None
-    stats: Mapping[str, Any] = field(default_factory=dict)
-
-
-@runtime_checkable
-class Solver(Protocol):
-    """The solver interface: one method.
-
-    ``time_limit`` is in seconds (``None``: the solver's own default); ``seed`` makes a randomised
-    solver reproducible. ``omega`` is ``None`` for distance-only instances. A class attribute
-    ``asymmetric = True`` (not part of the protocol; absent means ``False``) declares that the
-    solver prices a tour in its direction and so may be given asymmetric instances (on the class
-    itself: :func:`handles_asymmetric`).
-    """
-
-    def solve(
-        self, instance: Instance, omega: float | None, *, time_limit: float | None, seed: int
-    ) -> Solution:
-        """Solve ``instance`` for weight ``omega``."""
-        ...
-
-
-@dataclass(frozen=True)
-class Result:
-    """A checked, re-priced solution: what the CLI prints and the runner stores."""
-
-    instance: str
-    solver: str | None
-    omega: float | None
-    order: tuple[int, ...]
-    heads: tuple[int, ...]
-    objective: float
-    energy: Energy | None
-    distance: float
-    status: str
-    lower_bound: float | None
-    runtime_s: float
-    stats: Mapping[str, Any] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON object of ``gtsp-bench solve --json``."""
-        energy = None
-        if self.energy is not None:
-            energy = {k: getattr(self.energy, k) for k in ("total", "ground", "flight", "hover")}
-        return {
-            "instance": self.instance,
-            "solver": self.solver,
-            "omega": self.omega,
-            "order": list(self.order),
-            "heads": list(self.heads),
-            "objective": self.objective,
-            "energy": energy,
-            "distance": self.distance,
-            "status": self.status,
-            "lower_bound": self.lower_bound,
-            "runtime_s": self.runtime_s,
-        }
-
-    def summary(self) -> str:
-        """A few readable lines."""
-        unit = " J" if self.energy is not None else ""
-        lines = [
-            f"instance   {self.instance}",
-            f"solver     {self.solver or '(evaluated solution)'}"
-            + (f"  (omega = {self.omega:g})" if self.omega is not None else ""),
-            f"status     {self.status}",
-            f"objective  {self.objective:.6f}{unit}",
-        ]
-        if self.lower_bound is not None:
-            lines.append(f"bound      {self.lower_bound:.6f}{unit}")
-        if self.energy is not None:
-            e = self.energy
-            lines.append(
-                f"energy     ground {e.ground:.3f} J, flight {e.flight:.3f} J, hover {e.hover:.3f} J"
-            )
-        lines.append(f"distance   {self.distance:.3f}")
-        lines.append("tour       " + " -> ".join(
-            (["depot"] if self.energy is not None else [])
-            + [f"{c}[{self.heads[c]}]" for c in self.order]
-            + (["depot"] if self.energy is not None else [])
-        ))
-        lines.append(f"runtime    {self.runtime_s:.3f} s")
-        return "\n".join(lines)
+from gtsp_bench.solver import (
+    REL_TOL,
+    STATUSES,
+    Result,
+    Solution,
+    Solver,
+    handles_asymmetric,
+)
 
 
 # ---------------------------------------------------------------------- registry
@@ -350,18 +241,6 @@ def get_solver(name: str, **options: Any) -> Solver:
 
 
 # ---------------------------------------------------------------------- harness
-def handles_asymmetric(solver: object) -> bool:
-    """Whether a solver (object or class) declares ``asymmetric = True``: it takes asymmetric
-    costs (``edge_cost[i, j] != edge_cost[j, i]``) and prices every tour in its direction.
-
-    The class must declare it itself: the claim is not inherited, so a subclass that adds a step
-    (``greedy+ls`` over ``greedy``, whose 2-opt reversals assume symmetric costs) is refused
-    until it says ``asymmetric = True`` too.
-    """
-    cls = solver if inspect.isclass(solver) else type(solver)
-    return vars(cls).get("asymmetric", False) is True
-
-
 def check_capability(solver: object, name: str, instance: Instance) -> None:
     """:class:`InputError` (one line) when ``instance`` is asymmetric and the solver does not
     declare that it handles asymmetric costs."""

@@ -12,7 +12,6 @@ from gtsp_bench.instance import Instance
 REPO = Path(__file__).resolve().parents[1]
 #: The GTSPLIB library, a folder of the repository (instances/gtsplib/README.md).
 GTSPLIB = REPO / "instances" / "gtsplib"
-DATA = Path(__file__).resolve().parent / "data"
 
 
 @pytest.fixture
@@ -41,7 +40,7 @@ def _restore_solver_registry():
 
 
 def gtsplib_files() -> list[Path]:
-    """The five sample instances the tests use (:data:`gtsp_bench.gtsplib.SAMPLES`)."""
-    from gtsp_bench.gtsplib import SAMPLES
+    """The five sample instances the tests use (:data:`gtsp_bench.data.gtsplib.SAMPLES`)."""
+    from gtsp_bench.data.gtsplib import SAMPLES
 
     return [GTSPLIB / f"{name}.gtsp.gz" for name in SAMPLES]

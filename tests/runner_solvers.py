@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import time
 
-from gtsp_bench.registry import Solution, register_solver
+from gtsp_bench.registry import register_solver
+from gtsp_bench.solver import Solution
 
 
 class Crash:

@@ -6,9 +6,9 @@ import pytest
 from gtsp_bench.solvers.heuristics.aco import Aco
 
 from gtsp_bench.cli import main
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.registry import get_solver, run_solver
 
 from .conftest import GTSPLIB

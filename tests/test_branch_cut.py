@@ -12,9 +12,9 @@ from gtsp_bench.solvers.exact.milp import Milp
 from gtsp_bench.solvers.exact.mip.branch_cut import MipSolver, check_symmetric, degree_bound, solve_exact
 from gtsp_bench.solvers.exact.mip.options import MipOptions
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
 

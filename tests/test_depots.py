@@ -9,8 +9,8 @@ import numpy as np
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.peers.depots import best_of_runs, depot_candidates, run_nodes
 
+from gtsp_bench.data.gtsplib import read
 from gtsp_bench.generator import generate_instance
-from gtsp_bench.gtsplib import read
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from gtsp_bench.report import DOCS_BLOCKS, docs_dir_for, report_blocks
+from gtsp_bench.report.paper import DOCS_BLOCKS, docs_dir_for, report_blocks
 
 from .conftest import REPO
 

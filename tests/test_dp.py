@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.dp import DynamicProgramming
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.registry import run_solver
 
 from .conftest import GTSPLIB

@@ -16,11 +16,11 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from gtsp_bench import executors
+from gtsp_bench.bench import executors
+from gtsp_bench.bench.runner import make_config, run_bench
+from gtsp_bench.bench.tasklog import exclusive_lock
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-from gtsp_bench.runner import make_config, run_bench
-from gtsp_bench.tasklog import exclusive_lock
 
 from . import runner_solvers
 from .conftest import REPO
@@ -85,8 +85,8 @@ def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path,
     """`bench --set FOLDER` with greedy and lns (seeded) on a Dask scheduler gives the local pool's
     objectives solve for solve, re-uses every solve on a second run, and a sweep on a locked
     folder stops at once with one line naming the lock."""
+    from gtsp_bench.data.io import write_instance
     from gtsp_bench.generator import generate_instance
-    from gtsp_bench.io import write_instance
 
     folder = tmp_path / "tiny"
     for i in range(3):
@@ -236,7 +236,8 @@ def test_a_second_run_on_the_same_folder_stops_at_once_naming_the_lock(tmp_path,
 def test_a_lock_held_by_a_killed_process_does_not_block(tmp_path):
     """A process killed with SIGKILL while holding the lock leaves no stale lock behind."""
     lock = tmp_path / "tmp" / "bench.lock"
-    code = ("import sys, time; from pathlib import Path; from gtsp_bench.tasklog import exclusive_lock\n"
+    code = ("import sys, time; from pathlib import Path\n"
+            "from gtsp_bench.bench.tasklog import exclusive_lock\n"
             "with exclusive_lock(Path(sys.argv[1]), 'x'):\n"
             "    print('held', flush=True); time.sleep(60)\n")
     proc = subprocess.Popen([sys.executable, "-c", code, str(lock)], stdout=subprocess.PIPE, text=True,

@@ -7,9 +7,9 @@ import sys
 import pytest
 
 from gtsp_bench.cli import main
+from gtsp_bench.data.io import write_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
-from gtsp_bench.io import write_instance
 from gtsp_bench.registry import get_solver, run_solver
 
 from .test_milp import _instance

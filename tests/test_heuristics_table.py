@@ -1,4 +1,4 @@
-"""The heuristics-and-peers table (python -m gtsp_bench.heuristics_table): instance groups, the
+"""The heuristics-and-peers table (python -m gtsp_bench.bench.heuristics_table): instance groups, the
 generated instances of large K, cells, and the generated block it writes into a page."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from gtsp_bench import heuristics_table as ht
-from gtsp_bench.tables import Row
+from gtsp_bench.bench import heuristics_table as ht
+from gtsp_bench.bench.tables import Row
 
 from .conftest import REPO
 

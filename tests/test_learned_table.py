@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gtsp_bench.learned_table import large_cells, main, table
-from gtsp_bench.sets import read_reference
+from gtsp_bench.bench.learned_table import large_cells, main, table
+from gtsp_bench.data.sets import read_reference
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -11,8 +11,8 @@ import pytest
 from gtsp_bench.solvers.peers import lkh as peer
 from gtsp_bench.solvers.peers.lkh import noon_bean, scaled_weights, tour_from_atsp
 
-from gtsp_bench import gtsplib
 from gtsp_bench.cli import main
+from gtsp_bench.data import gtsplib
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance

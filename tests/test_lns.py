@@ -10,11 +10,11 @@ import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
 

@@ -22,7 +22,7 @@ from gtsp_bench.solvers.heuristics.lns_macro import (
 )
 from scipy.spatial.distance import cdist
 
-from gtsp_bench.io import read_instance
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.problem import price
 
 from .conftest import GTSPLIB

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch, Move, anchor_node, deadline_after, improve
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.generator import generate_instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
 

@@ -13,10 +13,10 @@ from gtsp_bench.solvers.learned.local import LocalPolicy  # noqa: E402
 from gtsp_bench.solvers.learned.local_solver import Local  # noqa: E402
 
 from gtsp_bench.cli import main  # noqa: E402
+from gtsp_bench.data.parse import format_json_instance  # noqa: E402
 from gtsp_bench.energy import evaluate  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
 from gtsp_bench.generator import instance_set  # noqa: E402
-from gtsp_bench.parse import format_json_instance  # noqa: E402
 from gtsp_bench.registry import get_solver, run_solver  # noqa: E402
 
 

@@ -13,10 +13,10 @@ from gtsp_bench.solvers.exact.mip import columns
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.registry import get_solver, run_solver
 
 from .conftest import GTSPLIB, REPO

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.peers import ortools as peer
 
-from gtsp_bench import gtsplib
 from gtsp_bench.checks import MAX_COORD
 from gtsp_bench.cli import main
+from gtsp_bench.data import gtsplib
+from gtsp_bench.data.io import read_instance, write_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance, write_instance
 from gtsp_bench.registry import get_solver, run_solver
 
 from .tiny_cases import tiny_case

@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 from gtsp_bench.solvers import BUILTIN
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
-from gtsp_bench.io import read_instance
 
 from .conftest import GTSPLIB, REPO
 
@@ -338,10 +338,10 @@ def test_the_cycle_finder_finds_cycles():
 def test_import_graph_is_read_right():
     """A few edges known from the sources: relative and absolute, module level and in functions."""
     graph = _import_graph()
-    assert "gtsp_bench.parse" in graph["gtsp_bench.io"]
-    assert "gtsp_bench.gtsplib" not in graph["gtsp_bench.io"]
+    assert "gtsp_bench.data.parse" in graph["gtsp_bench.data.io"]
+    assert "gtsp_bench.data.gtsplib" not in graph["gtsp_bench.data.io"]
     assert "gtsp_bench.solvers.heuristics.greedy" in graph["gtsp_bench.solvers.exact.dp"]
-    assert "gtsp_bench.report" in graph["gtsp_bench.cli_bench"]  # imported inside a command function
+    assert "gtsp_bench.report.paper" in graph["gtsp_bench.cli.bench"]  # imported inside a command function
     assert all(m.startswith("gtsp_bench") for targets in graph.values() for m in targets)
 
 

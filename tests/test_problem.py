@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 
 from .conftest import GTSPLIB

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.peers.pyvrp import folded_costs
 
+from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
 

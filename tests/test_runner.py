@@ -18,11 +18,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gtsp_bench import runner, tasks
+from gtsp_bench.bench import runner, tasks
+from gtsp_bench.bench.runner import CSV_COLUMNS, make_config, resolve_references, run_bench
+from gtsp_bench.bench.tasklog import TaskLog
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-from gtsp_bench.runner import CSV_COLUMNS, make_config, resolve_references, run_bench
-from gtsp_bench.tasklog import TaskLog
 
 from . import runner_solvers
 from .conftest import REPO
@@ -396,7 +396,7 @@ def test_a_killed_worker_is_retried_by_the_next_run(tmp_path, capsys, monkeypatc
 
 
 def runner_pool_attempts() -> int:
-    from gtsp_bench.pool import MAX_ATTEMPTS
+    from gtsp_bench.bench.pool import MAX_ATTEMPTS
 
     return MAX_ATTEMPTS
 
@@ -453,8 +453,8 @@ def _log_line(draw) -> bytes:
 def test_fuzz_the_log_reader_keeps_only_records_a_table_can_use(tmp_path_factory, lines, torn):
     """Any lines at all (and a torn tail): the reader never raises; each line is kept or named
     in a warning; every record it keeps makes a table row, as a solve or as the reference."""
+    from gtsp_bench.data.parse import format_json_instance
     from gtsp_bench.generator import generate_instance
-    from gtsp_bench.parse import format_json_instance
 
     path = tmp_path_factory.mktemp("log") / "runs.jsonl"
     path.write_bytes(b"".join(line + b"\n" for line in lines) + torn.replace(b"\n", b""))
@@ -478,7 +478,7 @@ def test_paper_experiments_run_lns_to_convergence(tmp_path):
     solve stops after the default 3 trials; without options the key is as before."""
     import json
 
-    from gtsp_bench.runner import paper_options, plan
+    from gtsp_bench.bench.runner import paper_options, plan
 
     config = _config(tmp_path, experiments="ratio-k", ks="4", solvers="lns", n_instances=1,
                      time_limit=5)

@@ -9,14 +9,14 @@ import shutil
 
 import pytest
 
-from gtsp_bench import suites
+from gtsp_bench.bench import suites
+from gtsp_bench.bench.suites import SUITES, make_suite_config, parse_exact
+from gtsp_bench.bench.tables import Row, time_to_proof_cell
 from gtsp_bench.cli import main
+from gtsp_bench.data.gtsplib import SAMPLES
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import instance_set
-from gtsp_bench.gtsplib import SAMPLES
 from gtsp_bench.registry import run_solver
-from gtsp_bench.suites import SUITES, make_suite_config, parse_exact
-from gtsp_bench.tables import Row, time_to_proof_cell
 
 from .conftest import REPO
 

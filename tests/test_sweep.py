@@ -8,15 +8,22 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gtsp_bench import tasks
+from gtsp_bench.bench import tasks
+from gtsp_bench.bench.sweep import (
+    TIDY_COLUMNS,
+    load_sets,
+    make_sweep_config,
+    parse_seeds,
+    plan_sweep,
+    run_sweep,
+)
 from gtsp_bench.cli import main
+from gtsp_bench.data.io import read_instance, write_instance
+from gtsp_bench.data.sets import ReferenceRow, read_reference, write_reference
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
-from gtsp_bench.io import read_instance, write_instance
 from gtsp_bench.registry import run_solver
-from gtsp_bench.sets import ReferenceRow, read_reference, write_reference
-from gtsp_bench.sweep import TIDY_COLUMNS, load_sets, make_sweep_config, parse_seeds, plan_sweep, run_sweep
 
 UAV = ("tiny-000", "tiny-001")
 GTSP = "tiny-gtsp"

@@ -1,4 +1,4 @@
-"""The suites' shared rows, cells, tables, timing and CSV writing (gtsp_bench.tables)."""
+"""The suites' shared rows, cells, tables, timing and CSV writing (gtsp_bench.bench.tables)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,7 @@ import math
 
 import pytest
 
-from gtsp_bench.errors import InputError
-from gtsp_bench.generator import instance_set
-from gtsp_bench.registry import Solution, register_solver
-from gtsp_bench.tables import (
+from gtsp_bench.bench.tables import (
     Row,
     count_failed,
     gap_time_cell,
@@ -21,6 +18,10 @@ from gtsp_bench.tables import (
     time_to_proof_cell,
     write_csv,
 )
+from gtsp_bench.errors import InputError
+from gtsp_bench.generator import instance_set
+from gtsp_bench.registry import register_solver
+from gtsp_bench.solver import Solution
 
 
 def _row(solver: str, objective: float, runtime: float, status: str = "feasible") -> Row:

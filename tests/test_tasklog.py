@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from gtsp_bench.tasklog import TaskLog, failure_cause, has_answer, needs_run
+from gtsp_bench.bench.tasklog import TaskLog, failure_cause, has_answer, needs_run
 
 
 def record(name: str, objective: float = 10.0, **kw) -> dict:

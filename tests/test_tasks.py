@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from gtsp_bench.bench.tasks import RunFolder, StoredInstance, Task, _task_message, task_key
+from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.generator import generate_instance
-from gtsp_bench.parse import format_json_instance
-from gtsp_bench.tasks import RunFolder, StoredInstance, Task, _task_message, task_key
 
 
 def _stored() -> StoredInstance:
@@ -44,7 +44,7 @@ def test_run_folder_paths_and_hard_limit():
 
 
 def test_where_solves_run_names_the_executor():
-    from gtsp_bench.tasks import where_solves_run
+    from gtsp_bench.bench.tasks import where_solves_run
 
     assert where_solves_run("local", 2) == "2 worker(s)"
     assert where_solves_run("dask", 3) == "3 local Dask worker(s)"

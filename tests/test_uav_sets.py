@@ -10,12 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from gtsp_bench.bench.runner import OMEGAS, PAPER_OMEGA_KS, RATIO_K_OMEGA
+from gtsp_bench.data.io import read_instance
+from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.energy import evaluate
 from gtsp_bench.generator import instance_set
-from gtsp_bench.io import read_instance
-from gtsp_bench.parse import format_json_instance
 from gtsp_bench.registry import get_solver, run_solver
-from gtsp_bench.runner import OMEGAS, PAPER_OMEGA_KS, RATIO_K_OMEGA
 
 REPO = Path(__file__).resolve().parents[1]
 INSTANCES = REPO / "instances"
@@ -40,7 +40,7 @@ def references(k: int) -> list[dict[str, str]]:
 
 
 def paper_omegas(k: int) -> set[float]:
-    """The omegas gtsp_bench.runner solves at K = k (omega sweeps at the paper's K, else 0.5)."""
+    """The omegas gtsp_bench.bench.runner solves at K = k (omega sweeps at the paper's K, else 0.5)."""
     return set(OMEGAS) | {RATIO_K_OMEGA} if k in PAPER_OMEGA_KS else {RATIO_K_OMEGA}
 
 

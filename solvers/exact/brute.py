@@ -15,7 +15,7 @@ from gtsp_bench.checks import check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Default limit on the number of (order, heads) combinations enumerated.
 MAX_TOURS = 20_000_000
@@ -37,7 +37,7 @@ class Brute:
         Refuse instances with more candidate tours than this.
     """
 
-    #: Prices every tour in its direction (see :func:`gtsp_bench.registry.handles_asymmetric`).
+    #: Prices every tour in its direction (see :func:`gtsp_bench.solver.handles_asymmetric`).
     asymmetric = True
 
     def __init__(self, max_tours: int = MAX_TOURS) -> None:

@@ -21,7 +21,7 @@ from gtsp_bench.checks import check_float
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Bytes per table entry: a float64 cost and an int32 parent.
 _BYTES_PER_STATE = 12

@@ -46,7 +46,7 @@ from gtsp_bench.checks import check_bool, check_choice, check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Subtour elimination constraints on offer.
 SUBTOURS = ("mtz", "flow", "dfj")

@@ -26,7 +26,7 @@ from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_aft
 from gtsp_bench.checks import check_float, check_int
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Share of the time limit ``aco+ls`` keeps for its local search: the colony stops earlier.
 LS_SHARE = 0.2

@@ -12,7 +12,7 @@ import numpy as np
 
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 
 def greedy_tour(problem: Problem, start: int) -> np.ndarray:

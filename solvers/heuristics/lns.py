@@ -72,7 +72,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
 #: A trial that does not improve the best tour doubles the next one's temperatures, up to this factor.

@@ -34,7 +34,7 @@ from gtsp_bench.checks import check_time_limit
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
 REL_TOL = 1e-9

@@ -18,8 +18,8 @@ from gtsp_bench.solvers.learned import CHECKPOINT_DIR
 from gtsp_bench.solvers.learned.policies import build_policy
 from torch import nn
 
+from gtsp_bench.data.io import atomic_write_bytes
 from gtsp_bench.errors import InputError
-from gtsp_bench.io import atomic_write_bytes
 
 #: Where the shipped checkpoints live.
 #: Marker of a policy file.

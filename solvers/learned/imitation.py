@@ -46,9 +46,9 @@ from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, t
 from torch import nn
 
 from gtsp_bench.checks import arg_float, arg_seed, check_choice, check_float, check_int, check_seed
+from gtsp_bench.data.io import atomic_write_bytes, atomic_write_text
 from gtsp_bench.errors import InputError, OneLineParser
 from gtsp_bench.generator import instance_set
-from gtsp_bench.io import atomic_write_bytes, atomic_write_text
 
 #: Seeds of the validation set (never used for training or testing).
 VAL_SEED = 818_273

@@ -27,7 +27,7 @@ from torch import nn
 from gtsp_bench.checks import check_bool, check_choice, check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 
 class LearnedSolver:

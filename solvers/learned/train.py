@@ -47,9 +47,9 @@ from gtsp_bench.solvers.learned.policies import build_policy
 from gtsp_bench.solvers.learned.recipes import TrainConfig
 from torch import nn
 
+from gtsp_bench.data.io import atomic_write_bytes, atomic_write_text
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_batch
-from gtsp_bench.io import atomic_write_bytes, atomic_write_text
 
 #: Seed of the fixed validation set (never used for training or testing).
 VAL_SEED = 918_273

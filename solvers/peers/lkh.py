@@ -65,7 +65,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Largest transformed weight, big-M included (LKH reserves INT_MAX / 2 / PRECISION ~ 1.07e7).
 LIMIT = 10_000_000

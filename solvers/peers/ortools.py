@@ -61,7 +61,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: First solution strategies (names of OR-Tools' ``FirstSolutionStrategy``) that build a tour of
 #: this model; ``EVALUATOR_STRATEGY`` (needs a callback), ``SWEEP`` (needs coordinates),

@@ -32,7 +32,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 
 def _import_pyvrp():

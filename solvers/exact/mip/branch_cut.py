@@ -33,7 +33,7 @@ from gtsp_bench.solvers.heuristics import lns_kernels
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.registry import Solution
+from gtsp_bench.solver import Solution
 
 #: Columns priced into the root LP per round, per node.
 PRICE_PER_NODE = 2

@@ -1,0 +1,370 @@
+"""Worker processes for the runner: one solver per process, fresh interpreters, hard time limits.
+
+Each worker is a new Python interpreter (``subprocess``) talking to the runner over a socket pair
+wrapped in a :class:`multiprocessing.connection.Connection`. It imports only this module, the
+harness and its one solver, never the caller's ``__main__``: start-up costs the same from the CLI,
+a script or pytest, and solvers whose libraries cannot share a process (highspy and ortools) never
+meet. A worker builds its solver once, then solves the tasks it is sent one at a time; the runner
+kills a worker whose solve exceeds the hard limit and starts another. :func:`run_jobs` uses a
+:class:`WorkerPool` once; the Dask executors (:mod:`gtsp_bench.bench.executors`) keep one on each Dask
+worker thread, so that its worker process serves that thread's next solve of the same solver.
+
+Runtimes come from :func:`gtsp_bench.registry.run_solver` inside the worker (the solver's own
+``solve`` call), so process start-up and instance parsing are never counted.
+
+Failures say whose they are (``cause``): a solver that raises gives a ``failed`` record with cause
+``solver``; one that refuses its input by design (an :class:`~gtsp_bench.errors.InputError`, such
+as dp above its memory limit) a ``refused`` record; a worker that dies under a solve (the OOM
+killer, ``kill -9``, a crash in native code) or a solve that runs out of memory is the
+infrastructure's fault: the job is tried again in a fresh worker, up to :data:`MAX_ATTEMPTS`
+times, and only then recorded as ``failed`` with cause ``infrastructure`` (which a later run
+retries).
+
+A worker starts with the caller's import path less its working-directory entry (``python -P``
+and an explicit ``sys.path``), so a file in the user's folder named like a module cannot shadow
+it, and its file descriptor 1 points at stderr: a library that prints cannot reach the runner's
+stdout.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections import deque
+from collections.abc import Callable, Hashable, Mapping, Sequence
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection, wait
+from typing import Any
+
+#: Seconds a worker may take to import and build its solver.
+INIT_TIMEOUT_S = 300.0
+#: Thread-pool variables set to 1 in workers (unless already set): jobs x threads <= cores.
+THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+#: Times a job is tried when its worker dies under it or it runs out of memory.
+MAX_ATTEMPTS = 3
+#: Cause of a failure outside the solver's control (see :data:`gtsp_bench.checks.FAILURE_CAUSES`).
+INFRASTRUCTURE = "infrastructure"
+
+
+def failure(note: str, status: str = "failed", cause: str = "solver") -> dict[str, Any]:
+    """A result record for a solve that gave no solution (``cause``: whose fault it was)."""
+    out: dict[str, Any] = {"status": status, "objective": None, "note": note}
+    if status == "failed":
+        out["cause"] = cause
+    return out
+
+
+def one_line(e: BaseException) -> str:
+    """``"Type: message"`` of an exception, its first line, at most 300 characters."""
+    text = f"{type(e).__name__}: {e}"
+    return (text.splitlines() or [text])[0][:300]
+
+
+def _plain(stats: Mapping[str, Any]) -> dict[str, Any]:
+    """Solver statistics made JSON-safe (numbers, strings, booleans, None; others as text)."""
+    return {str(k): v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
+            for k, v in stats.items()}
+
+
+def _limit_threads() -> None:
+    torch = sys.modules.get("torch")
+    if torch is not None and torch.get_num_threads() != 1:
+        torch.set_num_threads(1)
+
+
+def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
+    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options]}`` through
+    the harness.
+
+    The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint; a message with
+    solver ``options`` is solved by a solver built with them (once per set of options). An
+    :class:`InputError` becomes a ``refused`` record, a :class:`MemoryError` a ``failed`` one with
+    cause ``infrastructure``, any other exception a ``failed`` one with cause ``solver``.
+    """
+    from gtsp_bench.data.parse import parse_instance_text
+    from gtsp_bench.errors import InputError
+    from gtsp_bench.registry import get_solver, run_solver
+
+    start = time.perf_counter()
+    try:
+        if msg.get("options"):
+            built = "solver:" + json.dumps(msg["options"], sort_keys=True)
+            if built not in cache:
+                cache[built] = get_solver(name, **msg["options"])
+            solver = cache[built]
+        inst = cache.get(msg["fingerprint"])
+        if inst is None:
+            inst = cache[msg["fingerprint"]] = parse_instance_text(msg["text"])
+        _limit_threads()
+        res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
+                         seed=msg["seed"], name=name)
+    except InputError as e:  # the solver declines this input by design
+        out = failure(one_line(e), "refused")
+    except MemoryError as e:
+        out = failure(f"out of memory: {one_line(e)}", cause=INFRASTRUCTURE)
+    except Exception as e:  # any solver error becomes a row; the run goes on
+        out = failure(one_line(e))
+    else:
+        e = res.energy
+        out = {
+            "status": res.status, "objective": res.objective, "lower_bound": res.lower_bound,
+            "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
+            "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
+            "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
+            "note": "", "stats": _plain(res.stats),
+        }
+    out["task_wall_s"] = time.perf_counter() - start
+    return out
+
+
+def worker_main(fd: int) -> None:
+    """Entry point of a worker process: ``fd`` is its end of the socket pair."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the runner handles Ctrl-C and stops workers
+    sys.stdout.flush()
+    os.dup2(2, 1)  # whatever a library prints goes to stderr, never to the caller's stdout
+    conn = Connection(fd)
+    try:
+        name, target, description = conn.recv()
+        from gtsp_bench.errors import InputError
+        from gtsp_bench.registry import get_solver, register_solver, solver_names
+
+        if name not in solver_names():
+            if target is None:
+                raise InputError(
+                    f"solver {name!r} was registered by a class that a worker process cannot "
+                    f"import (defined in __main__ or inside a function); register it by a "
+                    f"'module:Class' string or a class from an importable module"
+                )
+            register_solver(name, target, description)
+        solver = get_solver(name)
+        _limit_threads()
+        conn.send(("ready", None))
+    except (EOFError, OSError):
+        return
+    except Exception as e:
+        conn.send(("init_failed", one_line(e)))
+        return
+    cache: dict[str, Any] = {}
+    while True:
+        try:
+            msg = conn.recv()
+            if msg is None:
+                return
+            conn.send(("done", solve_message(solver, name, msg, cache)))
+        except (EOFError, OSError):  # the runner is gone
+            return
+
+
+@dataclass
+class _Worker:
+    proc: subprocess.Popen
+    conn: Connection
+    ready: bool = False
+    job: Hashable | None = None
+    started: float = 0.0
+    born: float = field(default_factory=time.monotonic)
+
+
+def worker_path() -> list[str]:
+    """The import path of a worker: this process's ``sys.path`` without the empty entry, which
+    stands for the working directory (the worker's ``-P`` keeps Python from adding its own)."""
+    return [p for p in sys.path if p]
+
+
+def _start_worker(name: str, target: str | None, description: str) -> _Worker:
+    ours, theirs = socket.socketpair()
+    env = dict(os.environ)
+    for var in THREAD_VARS:
+        env.setdefault(var, "1")
+    code = ("import sys, json; sys.path[:] = json.loads(sys.argv[2]); "
+            "from gtsp_bench.bench.pool import worker_main; worker_main(int(sys.argv[1]))")
+    try:
+        proc = subprocess.Popen([sys.executable, "-P", "-c", code, str(theirs.fileno()),
+                                 json.dumps(worker_path())],
+                                pass_fds=[theirs.fileno()], env=env, stdin=subprocess.DEVNULL)
+    finally:
+        theirs.close()
+    conn = Connection(ours.detach())
+    conn.send((name, target, description))
+    return _Worker(proc, conn)
+
+
+def _stop_worker(w: _Worker, *, kill: bool = False) -> None:
+    if not kill:
+        try:
+            w.conn.send(None)
+            w.proc.wait(timeout=2)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+    if w.proc.poll() is None:
+        w.proc.kill()
+    w.proc.wait()
+    w.conn.close()
+
+
+@dataclass
+class PhaseStats:
+    """What one solver's phase cost: solves, the solvers' own time and the wall time."""
+
+    solver: str
+    solves: int = 0
+    solver_s: float = 0.0
+    wall_s: float = 0.0
+    workers: int = 0
+
+
+class WorkerPool:
+    """Worker processes of one solver, kept between calls of :meth:`run` (at most
+    ``n_workers``); :func:`run_jobs` is one pool used once. Close it (or use it as a context
+    manager) to stop its workers."""
+
+    def __init__(self, solver: str, target: str | None, description: str, n_workers: int) -> None:
+        self.solver, self.target, self.description = solver, target, description
+        self.n_workers = n_workers
+        self.workers: list[_Worker] = []
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop every worker."""
+        while self.workers:
+            w = self.workers.pop()
+            _stop_worker(w, kill=w.job is not None)
+
+    def _start(self) -> None:
+        self.workers.append(_start_worker(self.solver, self.target, self.description))
+
+    def run(self, jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], hard_limit: float,
+            on_result: Callable[[Hashable, dict[str, Any], bool], None]) -> PhaseStats:
+        """Solve ``jobs`` as :func:`run_jobs` does, with the pool's workers (started as needed,
+        idle ones kept for the next call; a worker still solving when this returns by an
+        exception is killed)."""
+        stats = PhaseStats(self.solver, workers=min(self.n_workers, len(jobs)))
+        if not jobs:
+            return stats
+        start = time.perf_counter()
+        pending = deque(jobs)
+        messages = dict(jobs)
+        attempts: dict[Hashable, int] = {}
+        workers = self.workers
+        while len(workers) < stats.workers:
+            self._start()
+
+        def retry(job: Hashable) -> bool:
+            """Queue ``job`` again (first in line) unless it has had its attempts."""
+            attempts[job] = attempts.get(job, 1) + 1
+            if attempts[job] > MAX_ATTEMPTS:
+                return False
+            pending.appendleft((job, messages[job]))
+            return True
+
+        def fail_all(note: str) -> None:
+            for job in [*(j for j, _ in pending), *(w.job for w in workers if w.job is not None)]:
+                on_result(job, failure(note), False)
+            pending.clear()
+            for w in workers:
+                w.job = None
+
+        def dispatch(w: _Worker) -> None:
+            if w.ready and w.job is None and pending:
+                w.job, msg = pending.popleft()
+                w.started = time.monotonic()
+                w.conn.send(msg)
+
+        try:
+            while workers and (pending or any(w.job is not None for w in workers)):
+                for w in workers:
+                    dispatch(w)
+                wait([w.conn for w in workers], timeout=0.5)
+                now = time.monotonic()
+                for w in list(workers):
+                    reply: tuple[str, Any] | None = ("dead", None)
+                    try:
+                        if w.conn.poll():
+                            reply = w.conn.recv()
+                        elif w.proc.poll() is None:
+                            reply = None
+                    except (EOFError, OSError):
+                        pass
+                    if reply is None:
+                        over = w.job is not None and now - w.started > hard_limit
+                        stuck = not w.ready and now - w.born > INIT_TIMEOUT_S
+                        if not (over or stuck):
+                            continue
+                        reply = ("killed", None) if over else ("stuck", None)
+                    kind, payload = reply
+                    if kind == "ready":
+                        w.ready = True
+                        continue
+                    if kind == "done":
+                        job, w.job = w.job, None
+                        if payload.get("cause") == INFRASTRUCTURE and retry(job):
+                            _stop_worker(w, kill=True)  # out of memory: start clean
+                            workers.remove(w)
+                            self._start()
+                            continue
+                        stats.solves += 1
+                        if math.isfinite(payload.get("runtime_s", math.nan)):
+                            stats.solver_s += payload["runtime_s"]
+                        dispatch(w)  # the next solve runs while the result is logged
+                        on_result(job, payload, True)
+                        continue
+                    _stop_worker(w, kill=True)  # unusable from here on
+                    workers.remove(w)
+                    if kind == "init_failed" or not w.ready:
+                        reason = payload if kind == "init_failed" else (
+                            "its worker timed out starting" if kind == "stuck"
+                            else f"its worker died (exit code {w.proc.returncode})")
+                        fail_all(f"solver could not be built: {reason}")
+                        return stats
+                    if w.job is not None and kind == "killed":
+                        on_result(w.job, failure(f"killed: no answer after {hard_limit:g} s",
+                                                 "time_limit"), True)
+                    elif w.job is not None and not retry(w.job):
+                        on_result(w.job, failure(f"worker died (exit code {w.proc.returncode}) in "
+                                                 f"{MAX_ATTEMPTS} attempts", cause=INFRASTRUCTURE), True)
+                    if pending:
+                        self._start()
+        finally:
+            for w in [w for w in workers if w.job is not None]:  # interrupted mid-solve
+                _stop_worker(w, kill=True)
+                workers.remove(w)
+            stats.wall_s = time.perf_counter() - start
+        return stats
+
+
+def run_jobs(
+    solver: str, target: str | None, description: str,
+    jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], n_workers: int, hard_limit: float,
+    on_result: Callable[[Hashable, dict[str, Any], bool], None],
+) -> PhaseStats:
+    """Solve ``jobs`` (``(job id, task message)`` pairs) with one solver in fresh workers.
+
+    Parameters
+    ----------
+    solver, target, description
+        The registered name, its ``"module:Class"`` import path (registered in the worker when
+        the worker does not know the name; ``None`` when the class cannot be imported there) and
+        its description.
+    n_workers
+        Worker processes to use (at most one per job).
+    hard_limit
+        Seconds after which a solve's worker is killed (the record gets status ``time_limit``).
+    on_result
+        Called as ``on_result(job id, record, persist)`` once for every job; ``persist`` is
+        ``False`` when the solver could not even be built, so that a later run retries it. A job
+        whose worker died under it, or that ran out of memory, is tried again in a fresh worker
+        (at most :data:`MAX_ATTEMPTS` times in all) before its failure is reported.
+    """
+    with WorkerPool(solver, target, description, n_workers) as pool:
+        return pool.run(jobs, hard_limit, on_result)

@@ -1,0 +1,182 @@
+"""The GTSPLIB benchmark library by name: instances, GLKH's best tours and reference values.
+
+The library (143 instances, see ``instances/gtsplib/README.md``) is a folder of the source
+repository, ``instances/gtsplib/``, not package data: an installed wheel does not hold it. The
+folder is found beside this package in a source checkout (an editable install included), or where
+the environment variable ``GTSP_BENCH_GTSPLIB`` points; otherwise every function here raises an
+:class:`~gtsp_bench.errors.InputError` that says so.
+
+>>> from gtsp_bench import gtsplib
+>>> inst = gtsplib.read("11berlin52")
+>>> gtsplib.best_known()["11berlin52"].value
+4040.0
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from gtsp_bench.data.io import read_instance, read_tour
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+
+#: Environment variable naming the GTSPLIB folder (default: the repository's instances/gtsplib/).
+ENV_VAR = "GTSP_BENCH_GTSPLIB"
+#: The five instances the project's tests and benchmarks have always used (four proven optima
+#: and one best known).
+SAMPLES = ("11berlin52", "20kroA100", "40d198", "64lin318", "107att532")
+#: Values of :attr:`Reference.status`.
+STATUSES = ("optimal", "best_known")
+
+_REPO_FOLDER = Path(__file__).resolve().parents[2] / "instances" / "gtsplib"
+_COLUMNS = ("name", "clusters", "nodes", "best_known", "status", "type", "edge_weight_type",
+            "edge_weight_format", "tour")
+
+
+@dataclass(frozen=True)
+class Reference:
+    """One row of ``best_known.csv``.
+
+    Attributes
+    ----------
+    name
+        Instance name (``11berlin52``).
+    clusters, nodes
+        Its size.
+    value
+        The best-known objective: the length of GLKH's best tour.
+    status
+        ``"optimal"`` (a proven optimum: the symmetric instances up to 442 nodes, Fischetti et al.
+        1997) or ``"best_known"`` (the best tour found, not proven optimal).
+    type
+        ``GTSP``, ``AGTSP`` (asymmetric costs) or ``TSP`` as the file says.
+    edge_weight_type, edge_weight_format
+        As the file says (the format is empty for coordinate types).
+    tour
+        GLKH's tour file, relative to the library folder.
+    """
+
+    name: str
+    clusters: int
+    nodes: int
+    value: float
+    status: str
+    type: str
+    edge_weight_type: str
+    edge_weight_format: str
+    tour: str
+
+    @property
+    def proven(self) -> bool:
+        """Whether :attr:`value` is a proven optimum."""
+        return self.status == "optimal"
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the instance's costs are symmetric (AGTSP files are not: only the solvers that
+        handle asymmetric costs take them, see :func:`gtsp_bench.solver.handles_asymmetric`)."""
+        return self.type != "AGTSP"
+
+
+def parse_best_known(text: str) -> dict[str, Reference]:
+    """The rows of a ``best_known.csv`` text by instance name, in file order.
+
+    Raises
+    ------
+    InputError
+        For a missing column, a bad number or status, or a name listed twice.
+    """
+    reader = csv.DictReader(io.StringIO(text))
+    missing = [c for c in _COLUMNS if c not in (reader.fieldnames or [])]
+    if missing:
+        raise InputError(f"missing column {missing[0]!r}")
+    out: dict[str, Reference] = {}
+    for line, row in enumerate(reader, start=2):
+        try:
+            ref = Reference(row["name"], int(row["clusters"]), int(row["nodes"]),
+                            float(row["best_known"]), row["status"], row["type"],
+                            row["edge_weight_type"], row["edge_weight_format"], row["tour"])
+        except (TypeError, ValueError):
+            raise InputError(f"line {line}: bad row {row!r}") from None
+        if ref.status not in STATUSES:
+            raise InputError(f"line {line}: status {ref.status!r} is not one of {', '.join(STATUSES)}")
+        if ref.name in out:
+            raise InputError(f"line {line}: {ref.name} is listed twice")
+        out[ref.name] = ref
+    return out
+
+
+def folder() -> Path:
+    """The GTSPLIB folder (``$GTSP_BENCH_GTSPLIB``, else the repository's ``instances/gtsplib``).
+
+    Raises
+    ------
+    InputError
+        If it has no ``best_known.csv``: the library ships with the source repository, not the wheel.
+    """
+    env = os.environ.get(ENV_VAR)
+    where = Path(env) if env else _REPO_FOLDER
+    if not (where / "best_known.csv").is_file():
+        how = f"${ENV_VAR} points to {where}" if env else f"looked in {where}"
+        raise InputError(
+            f"GTSPLIB not found ({how}, no best_known.csv there): the library is the folder "
+            f"instances/gtsplib/ of the gtsp-bench source repository, not part of the installed "
+            f"package; set {ENV_VAR} to a copy of it"
+        )
+    return where
+
+
+@lru_cache(maxsize=4)
+def _best_known(where: Path) -> dict[str, Reference]:
+    table = where / "best_known.csv"
+    try:
+        return parse_best_known(table.read_text(encoding="utf-8"))
+    except InputError as e:
+        raise InputError(f"{table}: {e}") from None
+
+
+def best_known() -> dict[str, Reference]:
+    """Every instance's reference value by name (a fresh dict; the rows are frozen)."""
+    return dict(_best_known(folder()))
+
+
+def names() -> list[str]:
+    """All instance names, smallest first (the order of ``best_known.csv``)."""
+    return list(_best_known(folder()))
+
+
+def _reference(name: str) -> Reference:
+    table = _best_known(folder())
+    if name not in table:
+        close = difflib.get_close_matches(name, table, n=3)
+        hint = f"did you mean {', '.join(close)}? " if close else ""
+        raise InputError(f"unknown GTSPLIB instance {name!r} ({hint}{len(table)} instances: "
+                         "see gtsp_bench.data.gtsplib.names())")
+    return table[name]
+
+
+def path(name: str) -> Path:
+    """The instance file of ``name`` (``<folder>/<name>.gtsp.gz``)."""
+    _reference(name)
+    return folder() / f"{name}.gtsp.gz"
+
+
+def tour_path(name: str) -> Path:
+    """GLKH's best tour file of ``name``."""
+    return folder() / _reference(name).tour
+
+
+def read(name: str) -> Instance:
+    """Read the instance ``name``."""
+    return read_instance(path(name))
+
+
+def best_tour(name: str, instance: Instance | None = None) -> tuple[list[int], list[int]]:
+    """GLKH's best tour of ``name`` as ``(order, heads)`` of ``instance`` (default: read it)."""
+    return read_tour(tour_path(name), read(name) if instance is None else instance)

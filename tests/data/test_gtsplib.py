@@ -1,0 +1,166 @@
+"""The bundled GTSPLIB (instances/gtsplib/): GLKH's best tours priced by the one evaluator, the
+reference table, and the by-name helpers of gtsp_bench.data.gtsplib.
+
+Every instance of the library (143, 14 to 85,900 nodes: 124 symmetric and the 19 asymmetric
+``AGTSP`` ones) is read and GLKH's best tour of it priced with :func:`gtsp_bench.energy.evaluate`;
+the length must equal the published best-known value exactly. This checks the reader (every
+header variant, edge-weight type and explicit format that occurs), every distance rule against an
+independent implementation, and that an asymmetric tour is priced in the direction the tour file
+lists it. The instances above :data:`LARGE` nodes carry the ``large_gtsplib`` marker (about 10 s
+together); ``make test`` runs them, ``-m 'not large_gtsplib'`` leaves them out.
+"""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+
+import pytest
+
+from gtsp_bench.data import gtsplib
+from gtsp_bench.data.io import read_instance, read_tour
+from gtsp_bench.energy import evaluate
+from gtsp_bench.errors import InputError
+from tests.conftest import GTSPLIB
+
+with (GTSPLIB / "best_known.csv").open() as _f:
+    ROWS = list(csv.DictReader(_f))
+ASYMMETRIC = [r for r in ROWS if r["type"] == "AGTSP"]
+#: Instances with more nodes than this are marked ``large_gtsplib``.
+LARGE = 10_000
+
+
+def _param(row: dict[str, str]):
+    marks = [pytest.mark.large_gtsplib] if int(row["nodes"]) > LARGE else []
+    return pytest.param(row, id=row["name"], marks=marks)
+
+
+def test_the_library_is_complete():
+    """143 instances, each with its file and GLKH's tour; nothing else in the folder."""
+    assert len(ROWS) == 143 and len(ASYMMETRIC) == 19
+    files = {p.name for p in GTSPLIB.glob("*.gtsp.gz")}
+    assert files == {f"{r['name']}.gtsp.gz" for r in ROWS}
+    tours = {f"tours/{p.name}" for p in (GTSPLIB / "tours").iterdir()}
+    assert tours == {r["tour"] for r in ROWS}
+    for r in ROWS:  # the tour file's name carries its length: NAME.LENGTH.tour.gz
+        assert r["tour"] == f"tours/{r['name']}.{r['best_known']}.tour.gz"
+
+
+@pytest.mark.parametrize("row", [_param(r) for r in ROWS])
+def test_best_tour_prices_to_the_best_known_value(row):
+    """GLKH's tour, read as (order, heads) and priced by the evaluator, has the published length;
+    AGTSP files give asymmetric instances, the others symmetric ones."""
+    inst = read_instance(GTSPLIB / f"{row['name']}.gtsp.gz")
+    assert (inst.n_clusters, inst.n_nodes) == (int(row["clusters"]), int(row["nodes"]))
+    assert inst.symmetric == (row["type"] != "AGTSP")
+    assert inst.edge_weight_type == row["edge_weight_type"]
+    assert (inst.weights is None) == (row["edge_weight_type"] != "EXPLICIT")
+    order, heads = read_tour(GTSPLIB / row["tour"], inst)
+    assert evaluate(inst, None, order, heads).objective == float(row["best_known"])
+
+
+def test_asymmetric_tours_are_priced_in_their_direction():
+    """GLKH lists an AGTSP tour in the direction it travels: reversed, all but the smallest
+    (4br17) cost more than the best-known value."""
+    dearer = []
+    for row in ASYMMETRIC:
+        inst = gtsplib.read(row["name"])
+        order, heads = gtsplib.best_tour(row["name"], inst)
+        back = evaluate(inst, None, order[::-1], heads).objective
+        assert back >= float(row["best_known"])
+        dearer.append(back > float(row["best_known"]))
+    assert sum(dearer) == len(ASYMMETRIC) - 1
+
+
+def test_symmetric_only_solver_refuses_an_agtsp_file():
+    """Through the CLI, a solver without asymmetric support refuses an AGTSP file: one line naming
+    the file, exit code 2; one that has it solves the file."""
+    path = GTSPLIB / "7ftv33.gtsp.gz"
+    cli = [sys.executable, "-m", "gtsp_bench.cli", "solve", str(path), "--time-limit", "5"]
+    out = subprocess.run([*cli, "--solver", "greedy+ls"], capture_output=True, text=True)
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr == (f"gtsp-bench: error: {path}: greedy+ls handles symmetric costs only "
+                          "(this instance is asymmetric)\n")
+    out = subprocess.run([*cli, "--solver", "greedy", "--json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert '"objective": ' in out.stdout
+
+
+def test_reference_status():
+    """Proven optima exactly for the symmetric instances up to 442 nodes; the five samples keep
+    the status they always had."""
+    refs = gtsplib.best_known()
+    assert len(refs) == 143
+    for ref in refs.values():
+        assert ref.proven == (ref.type == "GTSP" and ref.nodes <= 442), ref.name
+    assert [refs[n].status for n in gtsplib.SAMPLES] == ["optimal"] * 4 + ["best_known"]
+    assert refs["11berlin52"].value == 4040 and refs["107att532"].value == 13464
+    assert not refs["4br17"].symmetric and refs["4gr17"].symmetric
+    assert sum(not r.symmetric for r in refs.values()) == 19
+
+
+def test_glns_table_agrees_with_best_known():
+    """glns-45.csv's instances, sizes and best-known values are those of best_known.csv."""
+    refs = gtsplib.best_known()
+    with (GTSPLIB / "glns-45.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 45
+    for r in rows:
+        ref = refs[r["instance"]]
+        assert (ref.nodes, ref.clusters, ref.value) == (
+            int(r["vertices"]), int(r["sets"]), float(r["best_known"]))
+
+
+def test_helpers_by_name():
+    """names() in file order; path, tour_path, read and best_tour by name."""
+    names = gtsplib.names()
+    assert len(names) == 143 and names[0] == "3burma14" and set(gtsplib.SAMPLES) <= set(names)
+    assert gtsplib.path("11berlin52") == GTSPLIB / "11berlin52.gtsp.gz"
+    assert gtsplib.tour_path("11berlin52") == GTSPLIB / "tours" / "11berlin52.4040.tour.gz"
+    inst = gtsplib.read("11berlin52")
+    order, heads = gtsplib.best_tour("11berlin52")
+    assert evaluate(inst, None, order, heads).objective == 4040
+    assert gtsplib.best_tour("11berlin52", inst) == (order, heads)
+
+
+def test_unknown_name_suggests_close_ones():
+    """A misspelt name is an InputError that suggests the close names."""
+    with pytest.raises(InputError, match=r"unknown GTSPLIB instance '11berlin5' \(did you mean 11berlin52"):
+        gtsplib.path("11berlin5")
+
+
+def test_missing_folder_is_a_clear_error(tmp_path, monkeypatch):
+    """Pointed at a folder without the library (as from a wheel), every helper says where to get it."""
+    monkeypatch.setenv(gtsplib.ENV_VAR, str(tmp_path))
+    with pytest.raises(InputError, match=r"GTSPLIB not found .* not part of the installed package"):
+        gtsplib.names()
+    with pytest.raises(InputError, match="GTSPLIB not found"):
+        gtsplib.read("11berlin52")
+
+
+def test_the_folder_can_be_moved(tmp_path, monkeypatch):
+    """GTSP_BENCH_GTSPLIB points at a copy of the library."""
+    (tmp_path / "best_known.csv").write_text((GTSPLIB / "best_known.csv").read_text())
+    (tmp_path / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
+    monkeypatch.setenv(gtsplib.ENV_VAR, str(tmp_path))
+    assert gtsplib.folder() == tmp_path
+    assert gtsplib.read("11berlin52").n_clusters == 11
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("name,clusters\nx,1\n", "missing column 'nodes'"),
+        ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
+         "x,1,2,abc,optimal,GTSP,EUC_2D,,t\n", "line 2: bad row"),
+        ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
+         "x,1,2,3,proven,GTSP,EUC_2D,,t\n", "status 'proven' is not one of optimal, best_known"),
+        ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
+         "x,1,2,3,optimal,GTSP,EUC_2D,,t\nx,1,2,3,optimal,GTSP,EUC_2D,,t\n", "line 3: x is listed twice"),
+    ],
+)
+def test_bad_reference_tables(text, message):
+    """A malformed best_known.csv is an InputError naming the line."""
+    with pytest.raises(InputError, match=message):
+        gtsplib.parse_best_known(text)
