@@ -7,9 +7,8 @@ STAMP  := $(VENV)/.installed
 K      ?= 4..10
 # More runner options, e.g. BENCH_ARGS="--solvers greedy,aco --jobs 2" (gtsp-bench bench --help).
 BENCH_ARGS ?=
-SUITE_ARGS ?=
 
-.PHONY: install test lint docs bench bench-quick bench-exact bench-heuristics bench-heuristics-table bench-drl bench-learned train-local bench-glns bench-sets bench-scale clean
+.PHONY: install test lint docs bench bench-quick bench-all train-local clean
 
 install: $(STAMP)
 
@@ -34,34 +33,23 @@ docs: $(STAMP)
 	$(BIN)/python -m mkdocs build --strict --site-dir site
 
 # `python -m` runs this checkout's code whichever checkout the venv was installed from.
+# The paper's experiments into results/paper (about 2 minutes on 2 cores; K=4..10 by default).
 bench: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench -K $(K) $(BENCH_ARGS)
+	$(BIN)/python -m gtsp_bench.cli bench paper -K $(K) $(BENCH_ARGS)
 
 bench-quick: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench --quick $(BENCH_ARGS)
+	$(BIN)/python -m gtsp_bench.cli bench paper --quick $(BENCH_ARGS)
 
-# The side-by-side suites (gtsp-bench bench --suite NAME; rows in benchmarks/out/NAME.csv):
-# QUICK=1 for the quick preset, SUITE_ARGS for more options (gtsp-bench bench --help).
-bench-exact: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench --suite exact $(if $(QUICK),--quick) $(SUITE_ARGS)
+# Every named benchmark (gtsp-bench bench --list): `make bench-NAME` runs it into results/NAME;
+# QUICK=1 for its quick variant (results/quick/NAME), BENCH_ARGS for more options.
+bench-%: $(STAMP)
+	$(BIN)/python -m gtsp_bench.cli bench $* $(if $(QUICK),--quick) $(BENCH_ARGS)
 
-bench-heuristics: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench --suite heuristics $(if $(QUICK),--quick) $(SUITE_ARGS)
-
-# Every heuristic and peer on GTSPLIB by size and on UAV instances of K = 20..200, into the generated
-# block of docs/solvers/heuristics.md; TABLE_ARGS="--time-limit 30 --per-group 5" (--help for more).
-TABLE_ARGS ?=
-bench-heuristics-table: $(STAMP)
-	$(BIN)/python -m gtsp_bench.bench.heuristics_table $(TABLE_ARGS)
-
-bench-drl: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench --suite learned $(if $(QUICK),--quick) $(SUITE_ARGS)
-
-# Every learned policy (greedy as the baseline) from K = 4 to 200: mean gap per K and ms per
-# instance (gtsp_bench/learned_table.py; LEARNED_ARGS for options, e.g. LEARNED_ARGS="--clusters 4,20").
-LEARNED_ARGS ?=
-bench-learned: $(STAMP)
-	$(BIN)/python -m gtsp_bench.bench.learned_table $(LEARNED_ARGS)
+# Every committed table and figure, regenerated: the benchmarks whose outputs results/ and docs/
+# hold (about 3 h on 2 cores, most of it exact-scale; a rerun re-uses every finished solve).
+BENCH_ALL = paper heuristics-table learned scale textbook exact-scale
+bench-all: $(STAMP)
+	set -e; for b in $(BENCH_ALL); do $(BIN)/python -m gtsp_bench.cli bench $$b $(BENCH_ARGS); done
 
 # Train the local-view policy by imitating lns tours (the shipped checkpoints/local.pt; about 45
 # minutes on one core: labels, then 27 minutes of training). TRAIN_ARGS for more options.
@@ -69,27 +57,6 @@ TRAIN_ARGS ?=
 train-local: $(STAMP)
 	$(BIN)/python -m gtsp_bench.solvers.learned.imitation --recipe local \
 		-o solvers/learned/checkpoints/local.pt $(TRAIN_ARGS)
-
-# lns against GLNS on its 45 GTSPLIB instances (benchmarks/glns.py --help; GLNS_ARGS for options,
-# e.g. GLNS_ARGS="--seeds 3 --jobs 2", or "--large" for the 1,000-15,112-node files at 60 s).
-GLNS_ARGS ?=
-bench-glns: $(STAMP)
-	$(BIN)/python benchmarks/glns.py $(GLNS_ARGS)
-
-# A sweep over instance sets (gtsp-bench bench --set; outputs in benchmarks/out/sets): SET names
-# the set (gtsplib, a folder under instances/, a path), SET_ARGS passes more options.
-SET ?= gtsplib
-SET_ARGS ?=
-bench-sets: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench --set $(SET) $(SET_ARGS)
-
-# The scale experiment: the paper's solvers and ours on the committed UAV sets of K = 20..200
-# against their reference.csv (outputs in results/scale; SCALE_ARGS passes more options).
-SCALE_SETS = --set uav-K20-N20-s1 --set uav-K50-N20-s1 --set uav-K100-N20-s1 --set uav-K200-N20-s1
-SCALE_ARGS ?=
-bench-scale: $(STAMP)
-	$(BIN)/python -m gtsp_bench.cli bench $(SCALE_SETS) --solvers greedy,aco,drl,am,local,lns \
-		--omegas 0.5 --instances 10 --time-limit 10 --out results/scale $(SCALE_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info

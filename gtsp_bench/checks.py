@@ -191,6 +191,27 @@ def parse_omegas(text: object) -> tuple[float, ...]:
 EXECUTORS = ("local", "dask")
 
 
+def parse_seeds(text: str | Sequence[int]) -> tuple[int, ...]:
+    """Solver seeds: a list ``0,1,2``, a range ``0..4`` or a mix; order kept, repeats dropped."""
+    if not isinstance(text, str):
+        seeds = tuple(dict.fromkeys(check_seed(s) for s in text))
+        if not seeds:
+            raise InputError("bad seeds: no seed given")
+        return seeds
+    out: list[int] = []
+    for part in text.replace(" ", "").split(","):
+        lo, sep, hi = part.partition("..")
+        try:
+            a, b = int(lo), int(hi) if sep else int(lo)
+            if b < a:
+                raise ValueError
+            out += [check_seed(s) for s in range(a, b + 1)]
+        except (ValueError, InputError):
+            raise InputError(f"bad seeds {text!r}: {part!r} is not a seed or a range "
+                             "(expected e.g. 0,1,2 or 0..4)") from None
+    return tuple(dict.fromkeys(out))
+
+
 def check_executor(text: object) -> str:
     """Where the runner's solves run: ``local`` (this machine's worker pool), ``dask`` (a Dask
     cluster on this machine) or ``tcp://HOST:PORT`` (an existing Dask scheduler), returned as

@@ -17,8 +17,10 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+import statistics
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 from typing import Any
@@ -34,6 +36,7 @@ from gtsp_bench.solver import (
     Solution,
     Solver,
     handles_asymmetric,
+    solves_batches,
 )
 
 
@@ -293,7 +296,20 @@ def run_solver(
     check_capability(solver, name, instance)
     start = time.perf_counter()
     sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
-    runtime = time.perf_counter() - start
+    return checked_result(sol, instance, w, name, time.perf_counter() - start)
+
+
+def checked_result(sol: object, instance: Instance, omega: float | None, name: str,
+                   runtime: float) -> Result:
+    """Check a solver's answer on ``instance`` and re-price it with the evaluator.
+
+    Raises
+    ------
+    SolverError
+        Not a :class:`Solution`, an unknown or ``failed`` status, an infeasible tour, a claimed
+        objective the evaluator does not confirm, or a lower bound above the objective.
+    """
+    w = omega
     if not isinstance(sol, Solution):
         raise SolverError(f"solver {name!r} returned {type(sol).__name__}, not a Solution")
     if sol.status not in STATUSES:
@@ -329,3 +345,42 @@ def run_solver(
         runtime_s=runtime,
         stats=dict(sol.stats),
     )
+
+
+def run_solver_batch(
+    solver: Solver | str, instances: Sequence[Instance], omega: float | None = 0.5, *, seed: int = 0,
+    name: str | None = None, repeats: int = 1,
+) -> tuple[list[Result], float]:
+    """Solve ``instances`` in one call of the solver's ``solve_batch`` (one by one through
+    ``solve`` when it has none), ``repeats`` times; check and re-price every answer of the last
+    call. Returns the results and the median wall time of a whole batch in seconds (each
+    result's ``runtime_s`` is that time over the batch's size).
+
+    Raises
+    ------
+    InputError, SolverError
+        As :func:`run_solver`.
+    """
+    if isinstance(solver, str):
+        name = name or solver
+        solver = get_solver(solver)
+    name = name or type(solver).__name__
+    check_seed(seed)
+    omegas = [check_omega(omega) if inst.is_uav else None for inst in instances]
+    for inst in instances:
+        check_capability(solver, name, inst)
+    walls, sols = [], []
+    for _ in range(max(1, int(repeats))):
+        start = time.perf_counter()
+        if solves_batches(solver):
+            sols = list(solver.solve_batch(list(instances), omegas, seed=seed))
+        else:
+            sols = [solver.solve(i, w, time_limit=None, seed=seed)
+                    for i, w in zip(instances, omegas, strict=True)]
+        walls.append(time.perf_counter() - start)
+    if len(sols) != len(instances):
+        raise SolverError(f"solver {name!r} returned {len(sols)} solutions for {len(instances)} instances")
+    wall = statistics.median(walls)
+    each = wall / max(1, len(instances))
+    results = [checked_result(s, i, w, name, each) for s, i, w in zip(sols, instances, omegas, strict=True)]
+    return results, wall

@@ -80,7 +80,9 @@ def _limit_threads() -> None:
 
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
     """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options]}`` through
-    the harness.
+    the harness; a batch message (``batch``: a list of ``{fingerprint, text}``, ``repeats``) is
+    solved in one call (:func:`gtsp_bench.registry.run_solver_batch`) and answered with one record
+    per instance in ``items``.
 
     The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint; a message with
     solver ``options`` is solved by a solver built with them (once per set of options). An
@@ -89,7 +91,7 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
     """
     from gtsp_bench.data.parse import parse_instance_text
     from gtsp_bench.errors import InputError
-    from gtsp_bench.registry import get_solver, run_solver
+    from gtsp_bench.registry import get_solver, run_solver, run_solver_batch
 
     start = time.perf_counter()
     try:
@@ -98,29 +100,42 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
             if built not in cache:
                 cache[built] = get_solver(name, **msg["options"])
             solver = cache[built]
-        inst = cache.get(msg["fingerprint"])
-        if inst is None:
-            inst = cache[msg["fingerprint"]] = parse_instance_text(msg["text"])
+        def parsed(item: Mapping[str, Any]) -> Any:
+            inst = cache.get(item["fingerprint"])
+            if inst is None:
+                inst = cache[item["fingerprint"]] = parse_instance_text(item["text"])
+            return inst
+
         _limit_threads()
-        res = run_solver(solver, inst, msg["omega"], time_limit=msg["time_limit"],
-                         seed=msg["seed"], name=name)
+        if "batch" in msg:
+            insts = [parsed(item) for item in msg["batch"]]
+            results, wall = run_solver_batch(solver, insts, msg["omega"], seed=msg["seed"], name=name,
+                                             repeats=msg.get("repeats", 1))
+            out = {"status": "batch", "items": [_record(r) for r in results], "batch_wall_s": wall}
+        else:
+            res = run_solver(solver, parsed(msg), msg["omega"], time_limit=msg["time_limit"],
+                             seed=msg["seed"], name=name)
+            out = _record(res)
     except InputError as e:  # the solver declines this input by design
         out = failure(one_line(e), "refused")
     except MemoryError as e:
         out = failure(f"out of memory: {one_line(e)}", cause=INFRASTRUCTURE)
     except Exception as e:  # any solver error becomes a row; the run goes on
         out = failure(one_line(e))
-    else:
-        e = res.energy
-        out = {
-            "status": res.status, "objective": res.objective, "lower_bound": res.lower_bound,
-            "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
-            "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
-            "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
-            "note": "", "stats": _plain(res.stats),
-        }
     out["task_wall_s"] = time.perf_counter() - start
     return out
+
+
+def _record(res: Any) -> dict[str, Any]:
+    """The log record of a checked result."""
+    e = res.energy
+    return {
+        "status": res.status, "objective": res.objective, "lower_bound": res.lower_bound,
+        "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
+        "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
+        "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
+        "note": "", "stats": _plain(res.stats),
+    }
 
 
 def worker_main(fd: int) -> None:
@@ -260,6 +275,10 @@ class WorkerPool:
         while len(workers) < stats.workers:
             self._start()
 
+        def limit_of(job: Hashable) -> float:
+            """The job's own hard limit (its message's ``hard_limit``), else the phase's."""
+            return float(messages[job].get("hard_limit", hard_limit))
+
         def retry(job: Hashable) -> bool:
             """Queue ``job`` again (first in line) unless it has had its attempts."""
             attempts[job] = attempts.get(job, 1) + 1
@@ -297,7 +316,7 @@ class WorkerPool:
                     except (EOFError, OSError):
                         pass
                     if reply is None:
-                        over = w.job is not None and now - w.started > hard_limit
+                        over = w.job is not None and now - w.started > limit_of(w.job)
                         stuck = not w.ready and now - w.born > INIT_TIMEOUT_S
                         if not (over or stuck):
                             continue
@@ -314,8 +333,9 @@ class WorkerPool:
                             self._start()
                             continue
                         stats.solves += 1
-                        if math.isfinite(payload.get("runtime_s", math.nan)):
-                            stats.solver_s += payload["runtime_s"]
+                        spent = payload.get("runtime_s", payload.get("batch_wall_s", math.nan))
+                        if spent is not None and math.isfinite(spent):
+                            stats.solver_s += spent
                         dispatch(w)  # the next solve runs while the result is logged
                         on_result(job, payload, True)
                         continue
@@ -328,7 +348,7 @@ class WorkerPool:
                         fail_all(f"solver could not be built: {reason}")
                         return stats
                     if w.job is not None and kind == "killed":
-                        on_result(w.job, failure(f"killed: no answer after {hard_limit:g} s",
+                        on_result(w.job, failure(f"killed: no answer after {limit_of(w.job):g} s",
                                                  "time_limit"), True)
                     elif w.job is not None and not retry(w.job):
                         on_result(w.job, failure(f"worker died (exit code {w.proc.returncode}) in "

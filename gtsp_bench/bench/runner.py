@@ -53,15 +53,13 @@ import numpy as np
 import pandas as pd
 
 from gtsp_bench.bench.pool import PhaseStats
-from gtsp_bench.bench.tasklog import TaskLog, exclusive_lock, has_answer, needs_run
+from gtsp_bench.bench.tasklog import exclusive_lock
 from gtsp_bench.bench.tasks import (
     RunFolder,
     StoredInstance,
     Task,
     fingerprint,
-    phase_lines,
     task_key,
-    where_solves_run,
 )
 from gtsp_bench.checks import parse_ks, parse_names
 from gtsp_bench.data.io import atomic_write_text, read_instance
@@ -407,6 +405,9 @@ class RunSummary:
     written: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
     messages: list[str] = field(default_factory=list)
+    records: dict[str, dict[str, Any]] = field(default_factory=dict)
+    sets: dict[int, list[StoredInstance]] = field(default_factory=dict)
+    task_map: dict[str, Task] = field(default_factory=dict)
 
 
 def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) -> RunSummary:
@@ -427,10 +428,9 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
 
 
 def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
+    from gtsp_bench.bench.execute import execute
+
     t0 = time.perf_counter()
-    task_log = TaskLog(config.log_path)
-    task_log.open()  # an output folder that cannot be written fails here, before any work
-    task_log.close()
     summary = RunSummary()
     refs: dict[str, list[int]] = {}
     for k, r in config.references.items():
@@ -440,50 +440,14 @@ def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
             if r == "brute" else ""
         say(f"reference optimum: {r} for K = {ks_text(ks)}{note}")
     sets, tasks = plan(config)
-    records = task_log.load({key: tuple(int(n) for n in t.instance.instance.sizes)
-                             for key, t in tasks.items()})
-    for line in task_log.skipped[:MAX_SKIP_WARNINGS]:
-        say(f"warning: {line}; skipped, its solve is redone")
-    if len(task_log.skipped) > MAX_SKIP_WARNINGS:
-        say(f"warning: {config.log_path}: {len(task_log.skipped) - MAX_SKIP_WARNINGS} more bad "
-            f"records skipped")
-    todo = [t for t in tasks.values() if config.fresh or needs_run(records.get(t.key), config.retry_failed)]
-    summary.tasks, summary.cached = len(tasks), len(tasks) - len(todo)
-    where = where_solves_run(config.executor, config.jobs)
-    say(f"{len(tasks)} solves, {summary.cached} already in {config.log_path}, {len(todo)} to run "
-        f"with {where}, time limit {config.time_limit:g} s")
-    transient: dict[str, dict[str, Any]] = {}
-    if todo:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(todo), unit="solve", disable=not config.progress, dynamic_ncols=True)
-
-        def on_record(task: Task, rec: dict[str, Any], persist: bool) -> None:
-            full = {"key": task.key, "instance": task.instance.instance.name, "solver": task.solver,
-                    "omega": task.omega, "seed": task.seed, "time_limit": task.time_limit, **rec}
-            if persist:
-                task_log.append(full)
-            else:
-                transient[task.key] = full
-            records[task.key] = full
-            summary.run += 1
-            bar.update()
-
-        order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
-        try:
-            summary.phases += config.run_phases(order, todo, on_record, bar.set_description)
-        finally:
-            bar.close()
-            task_log.close()
-        for line in phase_lines(summary.phases):
-            say(line)
-    for solver in sorted({r["solver"] for r in transient.values()}):
-        note = next(r["note"] for r in transient.values() if r["solver"] == solver)
-        say(f"warning: {solver}: {note} (not recorded: a rerun retries it)")
-    finals = [records[key] for key in tasks if key in records]
-    summary.refused = sum(r["status"] == "refused" for r in finals)
-    summary.failed = sum(not has_answer(r) and r["status"] != "refused" for r in finals)
-    write_outputs(config, sets, records, summary, say)
+    say(f"time limit {config.time_limit:g} s per solve")
+    order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
+    outcome = execute(config, tasks, order, fresh=config.fresh, retry_failed=config.retry_failed,
+                      progress=config.progress, say=say)
+    summary.tasks, summary.cached, summary.run = outcome.tasks, outcome.cached, outcome.run
+    summary.failed, summary.refused, summary.phases = outcome.failed, outcome.refused, outcome.phases
+    summary.records, summary.sets, summary.task_map = outcome.records, sets, tasks
+    write_outputs(config, sets, outcome.records, summary, say)
     summary.wall_s = time.perf_counter() - t0
     say(f"done in {summary.wall_s:.1f} s: {summary.run} solves run, {summary.cached} re-used, "
         f"{summary.failed} failed, {summary.refused} refused"

@@ -23,6 +23,8 @@ from gtsp_bench.instance import Instance
 #: it is killed (solvers are expected to stop themselves at ``time_limit``).
 HARD_LIMIT_FACTOR = 2.0
 HARD_LIMIT_GRACE_S = 10.0
+#: A solve without a time limit (a learned policy's batch) is killed after this many seconds.
+NO_LIMIT_HARD_S = 900.0
 
 
 class RunFolder:
@@ -102,6 +104,36 @@ class Task:
     options: tuple[tuple[str, Any], ...] = ()
 
 
+@dataclass(frozen=True)
+class BatchTask:
+    """Several tasks of one solver, options, omega and seed, solved as one batch
+    (``solve_batch``, ``repeats`` times; each member's time is the median batch wall time over
+    its size). Each member keeps its own key: the log holds one record per instance."""
+
+    key: str
+    solver: str
+    members: tuple[Task, ...]
+    repeats: int = 1
+
+    @property
+    def time_limit(self) -> float | None:
+        return self.members[0].time_limit
+
+
+def batch_key(members: Sequence[Task]) -> str:
+    """A batch's job id: ``batch:`` and a hash of its members' keys."""
+    digest = hashlib.sha256("\n".join(t.key for t in members).encode()).hexdigest()[:16]
+    return f"batch:{members[0].solver}:{digest}"
+
+
+def hard_limit_for(time_limit: float | None) -> float:
+    """Seconds after which a worker's solve of that time limit is killed
+    (:data:`HARD_LIMIT_FACTOR` x limit + :data:`HARD_LIMIT_GRACE_S`; 600 s without a limit)."""
+    if time_limit is None:
+        return NO_LIMIT_HARD_S
+    return HARD_LIMIT_FACTOR * time_limit + HARD_LIMIT_GRACE_S
+
+
 @functools.cache
 def _revision(solver: str) -> str:
     from gtsp_bench.registry import solver_revision
@@ -112,7 +144,7 @@ def _revision(solver: str) -> str:
         return ""
 
 
-def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float,
+def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_limit: float | None,
              options: Sequence[tuple[str, Any]] = ()) -> str:
     """The log key: the instance's name and content hash, the solver, its revision if it has one
     (a learned policy's weights, see :func:`gtsp_bench.registry.solver_revision`), its options if
@@ -121,7 +153,8 @@ def task_key(inst: StoredInstance, solver: str, omega: float, seed: int, time_li
     name = f"{solver}@{revision}" if revision else solver
     if options:
         name += "[" + ",".join(f"{k}={v!r}" for k, v in options) + "]"
-    return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={time_limit:g}"
+    tl = "none" if time_limit is None else f"{time_limit:g}"
+    return f"{inst.instance.name}#{inst.fingerprint}|{name}|w={omega:g}|seed={seed}|tl={tl}"
 
 
 def where_solves_run(executor: str, jobs: int) -> str:
@@ -131,16 +164,33 @@ def where_solves_run(executor: str, jobs: int) -> str:
     return f"{jobs} local Dask worker(s)" if executor == "dask" else f"the Dask scheduler {executor}"
 
 
-def _task_message(t: Task) -> dict[str, Any]:
-    msg = {"fingerprint": t.instance.fingerprint, "text": t.instance.text, "omega": t.omega,
-           "seed": t.seed, "time_limit": t.time_limit}
-    if t.options:
-        msg["options"] = dict(t.options)
+def _task_message(t: Task | BatchTask) -> dict[str, Any]:
+    first = t.members[0] if isinstance(t, BatchTask) else t
+    msg: dict[str, Any] = {"omega": first.omega, "seed": first.seed, "time_limit": first.time_limit}
+    if isinstance(t, BatchTask):
+        msg["batch"] = [{"fingerprint": m.instance.fingerprint, "text": m.instance.text} for m in t.members]
+        msg["repeats"] = t.repeats
+        msg["hard_limit"] = hard_limit_for(first.time_limit) * (1 if first.time_limit else t.repeats)
+    else:
+        msg.update(fingerprint=t.instance.fingerprint, text=t.instance.text)
+        msg["hard_limit"] = hard_limit_for(t.time_limit)
+    if first.options:
+        msg["options"] = dict(first.options)
     return msg
 
 
+def split_batch(batch: BatchTask, rec: dict[str, Any]) -> list[tuple[Task, dict[str, Any]]]:
+    """A batch's record as one record per member: its ``items`` in order, or (a failed or killed
+    batch) the batch's failure for every member."""
+    items = rec.get("items")
+    if not isinstance(items, list) or len(items) != len(batch.members):
+        extra = {k: v for k, v in rec.items() if k != "items"}
+        return [(m, dict(extra)) for m in batch.members]
+    return list(zip(batch.members, items, strict=True))
+
+
 def run_solver_tasks(
-    solver: str, tasks: Sequence[Task], jobs: int, hard_limit: float,
+    solver: str, tasks: Sequence[Task | BatchTask], jobs: int, hard_limit: float,
     on_record: Callable[[Task, dict[str, Any], bool], None], *, executor: str = "local",
 ) -> PhaseStats:
     """Run one solver's tasks in the pool's worker processes, with its hard limit
@@ -155,6 +205,14 @@ def run_solver_tasks(
     spec = next(s for s in solver_specs() if s.name == solver)
     target = spec.import_path()  # a solver registered by class is re-registered in the workers
     by_key = {t.key: t for t in tasks}
+
+    def got(key: Any, rec: dict[str, Any], persist: bool) -> None:
+        task = by_key[key]
+        if isinstance(task, BatchTask):
+            for member, item in split_batch(task, rec):
+                on_record(member, item, persist)
+        else:
+            on_record(task, rec, persist)
+
     return open_executor(executor, jobs).run(
-        solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks], hard_limit,
-        lambda key, rec, persist: on_record(by_key[key], rec, persist))
+        solver, target, spec.description, [(t.key, _task_message(t)) for t in tasks], hard_limit, got)

@@ -41,8 +41,9 @@ examples:
   gtsp-bench evaluate k7.json --solution sol.json --omega 0.3
   gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver greedy
   gtsp-bench solvers
-  gtsp-bench bench -K 4..10
-  gtsp-bench bench --suite exact --quick
+  gtsp-bench bench --list
+  gtsp-bench bench paper -K 4..10
+  gtsp-bench bench heuristics --quick
 """
 
 def build_parser() -> argparse.ArgumentParser:
@@ -332,7 +333,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from gtsp_bench.cli.bench import run_bench_command
 
-    return run_bench_command(args, _answer if _answer is not None else sys.stdout)
+    return run_bench_command(args, _answer if _answer is not None else sys.stdout, args.argv)
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:
@@ -369,6 +370,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     global _answer
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     with _stdout_reserved() as answer:
         _answer = answer
         try:

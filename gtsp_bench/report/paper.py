@@ -411,11 +411,12 @@ def refresh_blocks(path: Path, blocks: Mapping[str, str], names: Sequence[str] |
 def docs_dir_for(out_dir: Path) -> Path | None:
     """The documentation folder whose pages a run into ``out_dir`` refreshes, or ``None``.
 
-    That is ``docs/`` beside ``out_dir`` when ``out_dir`` is a project's results folder: its parent
-    holds ``mkdocs.yml``. A run into another folder (``results/quick``, a temporary folder) leaves
-    the documentation alone.
+    That is ``docs/`` of the checkout when ``out_dir`` is its results folder or a benchmark's
+    folder in it (``results/paper``): the checkout holds ``mkdocs.yml``. A run into another
+    folder (``results/quick``, a temporary folder) leaves the documentation alone.
     """
-    root = Path(out_dir).resolve().parent
+    out = Path(out_dir).resolve()
+    root = out.parent.parent if out.parent.name == "results" and out.name == "paper" else out.parent
     docs = root / "docs"
     return docs if (root / "mkdocs.yml").is_file() and docs.is_dir() else None
 

@@ -1,39 +1,76 @@
-"""The bench command (gtsp_bench.cli.bench): each option belongs to a kind of run (the paper's
-experiments, --suite, --set), and one given to the wrong kind is one error line before anything
-runs or is written."""
+"""The bench command (gtsp_bench.cli.bench): one set of options for every benchmark, each checked
+before anything runs or is written; --list; --report-only redraws a run from its rows.csv."""
 
 from __future__ import annotations
 
+import pandas as pd
 import pytest
 
+from gtsp_bench.bench.definitions import BENCHMARKS
 from gtsp_bench.cli import build_parser, main
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--omegas", "0.5"], "--omegas is an option of the benchmark suites: add --suite"),
-    (["--suite", "exact", "--jobs", "2"], "--jobs is an option of the paper's experiments, not of --suite"),
-    (["--suite", "learned", "--executor", "dask"], "--executor is an option of the paper's experiments"),
-    (["--set", "x", "--suite", "exact"], "--set runs a sweep of its own: it cannot be combined with --suite"),
-    (["--set", "x", "--experiments", "ratio-k"],
-     "--set runs a sweep of its own: it cannot be combined with --experiments"),
-    (["--set", "x", "--reference", "dp"], "--reference is not an option of --set (see gtsp-bench bench"),
-    (["--set", "x", "--seed", "3"], "--seed is not an option of --set (the solver seeds are --seeds)"),
-    (["--seeds", "0,1"], "--seeds is an option of --set"),
-    (["--update-reference", "--suite", "exact"], "--update-reference is an option of --set"),
+    (["exact", "--omegas", "0.5,2"], "bad omegas '0.5,2'"),
+    (["heuristics", "-K", "10..4"], "bad K '10..4'"),
+    (["heuristics", "--seeds", "x"], "bad seeds 'x'"),
+    (["heuristics", "--time-limit", "0"], "time limit must be > 0"),
+    (["heuristics", "--jobs", "0"], "jobs must be an integer >= 1"),
+    (["sets", "--set", "no-such-set"], "unknown set 'no-such-set': no such folder or file"),
+    (["glns", "--names", "nowhere"], "--names: no instance 'nowhere'"),
+    (["scale", "--solvers", ","], "--solvers: no solver given"),
+    (["heuristics", "--executor", "spark"], "bad executor 'spark'"),
+    (["learned", "--report-only"], "rows.csv: cannot read the rows"),
 ])
-def test_an_option_of_another_kind_of_run_is_one_line(tmp_path, capsys, args, message):
+def test_bad_options_are_one_line_and_write_nothing(tmp_path, capsys, args, message):
+    """A bad value of any option: one error line, exit 2, no output folder."""
     code = main(["bench", *args, "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
-    assert code == 2 and err.startswith(f"gtsp-bench: error: {message}") and err.count("\n") == 1
+    assert code == 2 and err.startswith("gtsp-bench: error: ") and err.count("\n") == 1, err
+    assert message in err, err
     assert not (tmp_path / "out").exists()
 
 
-def test_help_names_the_three_kinds_and_every_suite(capsys):
-    """bench --help explains the experiments, --suite and --set, and lists each suite's options."""
+def test_help_explains_the_outputs_and_names_list(capsys):
+    """bench --help says what a run writes and how to list the benchmarks."""
     with pytest.raises(SystemExit) as stop:
         build_parser().parse_args(["bench", "--help"])
     assert stop.value.code == 0
     out = capsys.readouterr().out
-    assert "Run the paper's experiments" in out and "With --suite" in out and "With --set" in out
-    for suite in ("exact", "heuristics", "learned"):
-        assert f"\n  {suite} " in out
+    for word in ("rows.csv", "summary.md", "manifest.json", "--list", "--quick", "--report-only"):
+        assert word in out, word
+
+
+def test_report_only_redraws_summary_and_doc_table_from_rows(tmp_path, capsys):
+    """--report-only solves nothing: it rewrites summary.md from rows.csv (the same table a run
+    printed), and the answer on stdout is that table."""
+    out = tmp_path / "out"
+    argv = ["bench", "heuristics", "-K", "3", "--nodes", "4", "--instances", "2", "--solvers", "greedy",
+            "--jobs", "1", "--out", str(out), "--instance-dir", str(tmp_path / "inst"), "--no-progress"]
+    assert main(argv) == 0
+    first = capsys.readouterr().out
+    summary = (out / "summary.md").read_text()
+    (out / "summary.md").unlink()
+    assert main([*argv, "--report-only"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == first and (out / "summary.md").read_text() == summary
+    assert "solves run" not in captured.err
+    assert len(pd.read_csv(out / "rows.csv")) == 2
+
+
+def test_every_definition_is_runnable_data():
+    """Each definition names registered solvers (optional peers may be absent), outputs the
+    engine knows, quick fields that exist, and a rough time for --list."""
+    from dataclasses import fields
+
+    from gtsp_bench.bench.output_kinds import OUTPUTS
+    from gtsp_bench.registry import solver_names
+
+    names = set(solver_names())
+    valid = {f.name for f in fields(next(iter(BENCHMARKS.values())))}
+    for b in BENCHMARKS.values():
+        assert b.rough_time and b.description and b.sources, b.name
+        assert {r.solver for r in b.runs} <= names, b.name
+        assert set(b.outputs) - {"paper"} <= set(OUTPUTS), b.name
+        assert set(b.quick) <= valid, b.name
+        assert len({r.name for r in b.runs}) == len(b.runs), f"{b.name}: two runs share a label"

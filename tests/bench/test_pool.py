@@ -13,9 +13,8 @@ from gtsp_bench.solvers.heuristics.greedy import Greedy
 from gtsp_bench.bench.pool import MAX_ATTEMPTS, run_jobs, solve_message, worker_path
 from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.generator import generate_instance
-
-from .conftest import REPO
-from .runner_solvers import KILLS_FILE, Crash, OutOfMemory, Refuses
+from tests.conftest import REPO
+from tests.runner_solvers import KILLS_FILE, Crash, OutOfMemory, Refuses
 
 INSTANCE = generate_instance(3, 4, seed=1)
 
@@ -95,7 +94,7 @@ def test_workers_print_nothing_on_stdout_and_ignore_the_working_directory(tmp_pa
         "import sys, json\n"
         f"sys.path[:0] = [{str(REPO)!r}]\n"
         "from gtsp_bench.bench.pool import run_jobs\n"
-        "from tests.test_pool import _msg\n"
+        "from tests.bench.test_pool import _msg\n"
         "got = {}\n"
         "run_jobs('t-banner', 'tests.runner_solvers:Banner', 'test', [(0, _msg(0.3))], 1, 60.0,\n"
         "         lambda job, rec, p: got.__setitem__(job, rec))\n"

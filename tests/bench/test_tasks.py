@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gtsp_bench.bench.tasks import RunFolder, StoredInstance, Task, _task_message, task_key
+from gtsp_bench.bench.tasks import RunFolder, StoredInstance, Task, _task_message, hard_limit_for, task_key
 from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.generator import generate_instance
 
@@ -27,7 +27,8 @@ def test_task_key_names_options_only_when_given():
 def test_task_message_carries_options_when_there_are_some():
     s = _stored()
     bare = _task_message(Task("k", "greedy", 0.5, s, 0, 1.0))
-    assert bare == {"fingerprint": "abcd", "text": s.text, "omega": 0.5, "seed": 0, "time_limit": 1.0}
+    assert bare == {"fingerprint": "abcd", "text": s.text, "omega": 0.5, "seed": 0, "time_limit": 1.0,
+                    "hard_limit": hard_limit_for(1.0)}
     msg = _task_message(Task("k", "lns", 0.5, s, 0, 1.0, (("stop_at_convergence", True),)))
     assert msg["options"] == {"stop_at_convergence": True}
 

@@ -21,9 +21,8 @@ from gtsp_bench.bench.runner import make_config, run_bench
 from gtsp_bench.bench.tasklog import exclusive_lock
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-
-from . import runner_solvers
-from .conftest import REPO
+from tests import runner_solvers
+from tests.conftest import REPO
 
 runner_solvers.register()
 
@@ -82,7 +81,7 @@ def test_dask_gives_the_local_pools_objectives_and_a_rerun_reuses_every_solve(tm
 
 @dask_mark
 def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path, scheduler, capsys):
-    """`bench --set FOLDER` with greedy and lns (seeded) on a Dask scheduler gives the local pool's
+    """`bench sets --set FOLDER` with greedy and lns (seeded) on a Dask scheduler gives the local pool's
     objectives solve for solve, re-uses every solve on a second run, and a sweep on a locked
     folder stops at once with one line naming the lock."""
     from gtsp_bench.data.io import write_instance
@@ -91,12 +90,12 @@ def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path,
     folder = tmp_path / "tiny"
     for i in range(3):
         write_instance(generate_instance(4, 3, seed=i, name=f"tiny-{i}"), folder / f"tiny-{i}.json")
-    argv = ["bench", "--set", str(folder), "--solvers", "greedy,lns", "--omegas", "0.3,0.6",
+    argv = ["bench", "sets", "--set", str(folder), "--solvers", "greedy,lns", "--omegas", "0.3,0.6",
             "--time-limit", "2", "--jobs", "2", "--no-progress"]
     assert main([*argv, "--out", str(tmp_path / "local")]) == 0
     assert main([*argv, "--out", str(tmp_path / "dask"), "--executor", scheduler]) == 0
-    a = pd.read_csv(tmp_path / "local" / "sweep.csv")
-    b = pd.read_csv(tmp_path / "dask" / "sweep.csv")
+    a = pd.read_csv(tmp_path / "local" / "rows.csv")
+    b = pd.read_csv(tmp_path / "dask" / "rows.csv")
     assert len(a) == len(b) == 3 * 2 * 2 and a["objective"].notna().all()
     for col in ("instance", "omega", "solver", "status", "objective"):
         assert a[col].tolist() == b[col].tolist(), col
@@ -143,18 +142,28 @@ def test_a_dask_worker_lost_under_a_solve_is_retried_on_another(tmp_path, schedu
 
 
 # ---------------------------------------------------------------------- killed runners
-#: The sweep of the kill tests: 20 t-slow solves (0.3 s each; t-slow is its own reference).
-_SWEEP = {"experiments": "ratio-omega", "ks": "3", "solvers": "t-slow", "reference": "t-slow",
-          "n_instances": 2}
+def _tiny_set(tmp_path: Path) -> Path:
+    """Two generated instances of K = 3, N = 4 in a folder of their own."""
+    from gtsp_bench.data.io import write_instance
+    from gtsp_bench.generator import generate_instance
+
+    folder = tmp_path / "tiny"
+    for i in range(2):
+        write_instance(generate_instance(3, 4, seed=i, name=f"tiny-{i}"), folder / f"tiny-{i}.json")
+    return folder
+
+
+def _sweep_argv(tmp_path: Path, executor: str) -> list[str]:
+    """The kill tests' run: 20 t-slow solves (0.3 s each), 2 instances x 10 omegas."""
+    return ["bench", "sets", "--set", str(_tiny_set(tmp_path)), "--solvers", "t-slow", "--omegas",
+            "0,0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9", "--jobs", "2", "--executor", executor,
+            "--out", str(tmp_path / "out"), "--no-progress"]
 
 
 def _launch(tmp_path: Path, executor: str) -> tuple[subprocess.Popen, object]:
-    """``gtsp-bench bench`` of the :data:`_SWEEP` in a child process."""
-    config = _config(tmp_path, **_SWEEP)
-    argv = ["bench", "-e", "ratio-omega", "-K", "3", "--solvers", "t-slow", "--reference", "t-slow",
-            "--instances", "2", "--nodes", "4", "--jobs", "2", "--executor", executor,
-            "--out", str(config.out_dir), "--instance-dir", str(tmp_path / "inst"),
-            "--checkpoints", str(tmp_path / "ckpt"), "--no-progress"]
+    """``gtsp-bench bench sets`` of :func:`_sweep_argv` in a child process."""
+    config = _config(tmp_path)
+    argv = _sweep_argv(tmp_path, executor)
     # SIGINT as a terminal gives it: a shell's background job (e.g. CI started with `&`) starts its
     # children with SIGINT ignored, and Python then installs no KeyboardInterrupt handler
     launcher = ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
@@ -180,7 +189,7 @@ def _descendants(pid: int) -> list:
     pytest.param("dask", signal.SIGKILL, marks=dask_mark),
     pytest.param("tcp", signal.SIGINT, marks=dask_mark),
 ])
-def test_a_runner_killed_mid_sweep_loses_no_finished_solve(tmp_path, request, executor, sig):
+def test_a_runner_killed_mid_sweep_loses_no_finished_solve(tmp_path, request, capsys, executor, sig):
     """SIGINT or SIGKILL of a running `gtsp-bench bench` (on the local pool, on its own Dask
     cluster, on an existing one) once some solves are logged: every logged solve is kept and
     re-used, the rerun (on the existing Dask cluster where the run was on Dask) runs exactly the
@@ -201,11 +210,11 @@ def test_a_runner_killed_mid_sweep_loses_no_finished_solve(tmp_path, request, ex
     assert 3 <= len(before) < total, f"the run was not stopped midway:\n{err}"
     if sig == signal.SIGINT:
         assert proc.returncode == 130 and err.rstrip().endswith("gtsp-bench: interrupted"), err
-    again = _config(tmp_path, executor=address or "local", **_SWEEP)
-    summary = run_bench(again, log=_quiet)
+    assert main(_sweep_argv(tmp_path, address or "local")) == 0
+    err = capsys.readouterr().err
     after = _log_lines(config)
-    assert summary.tasks == total and summary.cached == len(before)
-    assert summary.run == total - len(before) and summary.failed == 0
+    assert f"{total} solves, {len(before)} already in" in err
+    assert f"{total - len(before)} solves run" in err and " 0 failed" in err
     assert after[: len(before)] == before and len(after) == total
     gone_by = time.monotonic() + 30
     while any(p.is_running() and p.status() != "zombie" for p in family) and time.monotonic() < gone_by:
@@ -219,10 +228,10 @@ def test_a_second_run_on_the_same_folder_stops_at_once_naming_the_lock(tmp_path,
     """While a run holds OUT/tmp/bench.lock, `gtsp-bench bench` on that folder exits 2 with one
     line naming the lock and its holder's process, and writes nothing; once it is free the run
     goes ahead."""
-    config = _config(tmp_path, experiments="ratio-k", ks="3", solvers="greedy", n_instances=1)
-    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "1",
+    config = _config(tmp_path)
+    argv = ["bench", "heuristics", "-K", "3", "--solvers", "greedy", "--instances", "1",
             "--nodes", "4", "--jobs", "1", "--out", str(config.out_dir), "--instance-dir",
-            str(tmp_path / "inst"), "--checkpoints", str(tmp_path / "ckpt"), "--no-progress"]
+            str(tmp_path / "inst"), "--no-progress"]
     with exclusive_lock(config.lock_path, "a test"):
         assert main(argv) == 2
     err = capsys.readouterr().err.strip()
@@ -264,10 +273,9 @@ def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypat
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
-    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "1",
+    argv = ["bench", "heuristics", "-K", "3", "--solvers", "greedy", "--instances", "1",
             "--nodes", "4", "--executor", f"tcp://127.0.0.1:{port}", "--out", str(tmp_path / "out"),
-            "--instance-dir", str(tmp_path / "inst"), "--checkpoints", str(tmp_path / "ckpt"),
-            "--no-progress"]
+            "--instance-dir", str(tmp_path / "inst"), "--no-progress"]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith(f"gtsp-bench: error: tcp://127.0.0.1:{port}: cannot reach the Dask "

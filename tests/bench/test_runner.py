@@ -23,10 +23,9 @@ from gtsp_bench.bench.runner import CSV_COLUMNS, make_config, resolve_references
 from gtsp_bench.bench.tasklog import TaskLog
 from gtsp_bench.cli import main
 from gtsp_bench.errors import InputError
-
-from . import runner_solvers
-from .conftest import REPO
-from .test_tasklog import record as _record
+from tests import runner_solvers
+from tests.bench.test_tasklog import record as _record
+from tests.conftest import REPO
 
 matplotlib.use("Agg")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -36,8 +35,7 @@ runner_solvers.register()
 
 
 def _dirs(tmp_path: Path) -> list[str]:
-    return ["--out", str(tmp_path / "out"), "--instance-dir", str(tmp_path / "inst"),
-            "--checkpoints", str(tmp_path / "ckpt"), "--no-progress"]
+    return ["--out", str(tmp_path / "out"), "--instance-dir", str(tmp_path / "inst"), "--no-progress"]
 
 
 def _config(tmp_path: Path, **kw):
@@ -67,17 +65,14 @@ def test_reference_resolution():
     (["-K", "4..x"], "bad K '4..x'"),
     (["-K", "60"], "would cover"),
     (["--solvers", "greedy,magic"], "unknown solver 'magic' (valid: "),
-    (["--experiments", "ratio-omega,speed"], "unknown experiment 'speed' (valid: "),
-    (["--reference", "cplex"], "unknown reference solver 'cplex'"),
     (["--jobs", "0"], "jobs must be an integer >= 1"),
     (["--time-limit", "0"], "time limit must be > 0"),
     (["--instances", "0"], "number of instances must be an integer >= 1"),
-    (["--seed", "-1"], "seed must be an integer >= 0, got -1"),
     (["--report-only"], "no experiment CSV files to report on"),
 ])
 def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
     """A bad K, solver, experiment or option: one error line, exit 2, no file or folder made."""
-    code = main(["bench", *args, *_dirs(tmp_path)])
+    code = main(["bench", "paper", *args, *_dirs(tmp_path)])
     err = capsys.readouterr().err
     assert code == 2
     assert err.startswith("gtsp-bench: error: ") and message in err and err.count("\n") == 1
@@ -99,15 +94,11 @@ def test_quick_mode_end_to_end(tmp_path, capsys):
     """--quick exactly as `make bench-quick` runs it (default solvers, N = 20, the shipped
     checkpoints) writes every CSV (documented columns, one row per instance x omega x solver,
     no failed solve, sane ratios), a valid PNG per experiment and the report."""
-    ckpt = tmp_path / "ckpt"
-    ckpt.mkdir()
-    (ckpt / "toy.train.csv").write_text(
-        "step,loss,reward,val_energy,wall_s,extra\n0,5.0,-3000,3100,0.1,1\n10,2.0,-2900,3000,1.0,1\n")
     code = main(["bench", "--quick", "--jobs", "2", *_dirs(tmp_path)])
     err = capsys.readouterr().err
     assert code == 0, err
     out = tmp_path / "out"
-    config = _config(tmp_path, quick=True, n_nodes=20)
+    config = _config(tmp_path, quick=True, n_nodes=20, checkpoint_dir=None)
     n_solvers = len(set(config.solvers) | set(config.references.values()))
     for exp in ("ratio-omega", "ratio-k", "runtime", "trajectories"):
         df = pd.read_csv(out / f"{exp}.csv")
@@ -185,13 +176,15 @@ def test_new_solver_revision_is_solved_again(tmp_path, monkeypatch):
 
 
 def test_killed_run_resumes(tmp_path):
-    """SIGKILL of a running `gtsp-bench bench` midway, plus a torn last line: the rerun keeps every
+    """SIGKILL of a running paper benchmark midway, plus a torn last line: the rerun keeps every
     finished solve, drops the torn line, and runs exactly the missing ones."""
     config = _config(tmp_path, experiments="ratio-omega", ks="3", solvers="t-slow", n_instances=3)
-    argv = ["bench", "-e", "ratio-omega", "-K", "3", "--solvers", "t-slow", "--instances", "3",
-            "--nodes", "4", "--jobs", "2", *_dirs(tmp_path)]
-    launcher = ("import tests.runner_solvers as t; t.register(); from gtsp_bench.cli import main; "
-                f"raise SystemExit(main({argv!r}))")
+    kw = {"experiments": "ratio-omega", "ks": "3", "solvers": "t-slow", "n_instances": 3, "n_nodes": 4,
+          "jobs": 2, "out_dir": str(tmp_path / "out"), "instance_dir": str(tmp_path / "inst"),
+          "checkpoint_dir": str(tmp_path / "ckpt"), "progress": False}
+    launcher = ("import tests.runner_solvers as t; t.register(); "
+                "from gtsp_bench.bench.runner import make_config, run_bench; "
+                f"run_bench(make_config(**{kw!r}), log=lambda m: None)")
     cmd = [sys.executable, "-c", launcher]
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=subprocess.DEVNULL,
@@ -299,122 +292,6 @@ def test_solver_registered_by_class_runs_in_the_workers(tmp_path):
     assert (by["t-by-class"]["status"] == "feasible").all(), by["t-by-class"]["note"].tolist()
     assert (by["t-local-class"]["status"] == "failed").all()
     assert by["t-local-class"]["note"].str.contains("a worker process cannot import").all()
-
-
-def test_unwritable_output_folder_fails_before_any_work(tmp_path, capsys):
-    """An --out that is a file: one error line naming the first file the run makes there (its
-    lock), exit 2, no instance written (it used to be a traceback after the first solve)."""
-    blocker = tmp_path / "out"
-    blocker.write_text("not a folder")
-    code = main(["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "1",
-                 "--nodes", "4", *_dirs(tmp_path)])
-    err = capsys.readouterr().err
-    assert code == 2
-    assert err == f"gtsp-bench: error: {blocker}/tmp/bench.lock: cannot write (Not a directory)\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
-
-
-def _csv_without_runtimes(path: Path) -> pd.DataFrame:
-    return pd.read_csv(path).drop(columns=["runtime_s"])
-
-
-def test_damaged_log_records_are_redone_and_give_the_same_csv(tmp_path, capsys):
-    """Each bad record of the log (a list key, a text objective, a line holding only the
-    reference's key) is skipped with one warning naming its line; the run exits 0 and writes the
-    same table as an undamaged run."""
-    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "2",
-            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
-    assert main(argv) == 0
-    capsys.readouterr()
-    csv = tmp_path / "out" / "ratio-k.csv"
-    clean = _csv_without_runtimes(csv)
-    log = tmp_path / "out" / "tmp" / "runs.jsonl"
-    lines = log.read_text().splitlines()
-    records = [json.loads(line) for line in lines]
-    dp = next(i for i, r in enumerate(records) if r["solver"] == "dp")
-    greedy = next(i for i, r in enumerate(records) if r["solver"] == "greedy")
-    damaged = list(lines)
-    damaged[dp] = json.dumps({"key": records[dp]["key"]})
-    damaged[greedy] = json.dumps({**records[greedy], "objective": "abc"})
-    damaged.insert(0, json.dumps({"key": ["x"]}))
-    log.write_text("\n".join(damaged) + "\n")
-    assert main(argv) == 0
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    warnings = [line for line in err.splitlines() if line.startswith("warning: ")]
-    assert len(warnings) == 3 and all(f"{log}:" in w for w in warnings), err
-    assert f"{log}:1: 'key' is not a non-empty string" in err
-    assert "2 solves run" in err and "0 failed" in err
-    pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
-
-
-@pytest.mark.parametrize("ending", ["\n", ""])
-def test_a_cut_last_record_is_redone_with_a_warning(tmp_path, capsys, ending):
-    """The log's last record cut mid-write, with or without a newline after it: the run exits 0,
-    redoes exactly that solve (with a warning naming the line when it is a whole line) and writes
-    the same table; the record it appends starts on a line of its own."""
-    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "greedy", "--instances", "2",
-            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
-    assert main(argv) == 0
-    capsys.readouterr()
-    csv = tmp_path / "out" / "ratio-k.csv"
-    clean = _csv_without_runtimes(csv)
-    log = tmp_path / "out" / "tmp" / "runs.jsonl"
-    lines = log.read_text().splitlines()
-    log.write_text("\n".join([*lines[:-1], lines[-1][: len(lines[-1]) // 2]]) + ending)
-    assert main(argv) == 0
-    err = capsys.readouterr().err
-    assert "Traceback" not in err and "1 solves run, 3 re-used" in err
-    warned = [line for line in err.splitlines() if line.startswith("warning: ")]
-    assert warned == ([f"warning: {log}:{len(lines)}: not a JSON record; skipped, its solve is redone"]
-                      if ending else [])
-    after = log.read_text().splitlines()
-    assert after[: len(lines) - 1] == lines[:-1]
-    assert json.loads(after[-1])["key"] == json.loads(lines[-1])["key"]
-    pd.testing.assert_frame_equal(_csv_without_runtimes(csv), clean)
-
-
-def test_a_killed_worker_is_retried_by_the_next_run(tmp_path, capsys, monkeypatch):
-    """A worker killed from outside under every attempt of a solve: that row is recorded failed
-    (cause infrastructure) and bench exits 1 saying so; the next run solves it again, with 0
-    failed and exit 0. A solver's own error stays failed until --retry-failed."""
-    kills = tmp_path / "kills"
-    kills.write_text(str(runner_pool_attempts()))
-    monkeypatch.setenv(runner_solvers.KILLS_FILE, str(kills))
-    argv = ["bench", "-e", "ratio-k", "-K", "3", "--solvers", "t-killed", "--instances", "1",
-            "--nodes", "4", "--jobs", "1", *_dirs(tmp_path)]
-    assert main(argv) == 1
-    err = capsys.readouterr().err
-    assert "1 failed, 0 refused (exit code 1" in err
-    row = pd.read_csv(tmp_path / "out" / "ratio-k.csv").set_index("solver").loc["t-killed"]
-    assert row["status"] == "failed" and "worker died (exit code -9)" in row["note"]
-    assert main(argv) == 0
-    err = capsys.readouterr().err
-    assert "1 solves run" in err and "0 failed" in err
-    row = pd.read_csv(tmp_path / "out" / "ratio-k.csv").set_index("solver").loc["t-killed"]
-    assert row["status"] == "feasible"
-
-
-def runner_pool_attempts() -> int:
-    from gtsp_bench.bench.pool import MAX_ATTEMPTS
-
-    return MAX_ATTEMPTS
-
-
-def test_solver_failures_stay_until_retry_failed_and_refusals_are_not_failures(tmp_path, capsys):
-    """A solver's own error is final (a rerun re-uses it, exit 1) until --retry-failed redoes
-    it; a refusal by design is counted as refused, and alone does not fail the run."""
-    base = ["bench", "-e", "ratio-k", "-K", "3", "--instances", "1", "--nodes", "4", "--jobs", "1",
-            *_dirs(tmp_path)]
-    assert main([*base, "--solvers", "t-refuses"]) == 0
-    err = capsys.readouterr().err
-    assert "0 failed, 1 refused" in err
-    assert main([*base, "--solvers", "t-crash"]) == 1
-    assert "1 solves run" in capsys.readouterr().err
-    assert main([*base, "--solvers", "t-crash"]) == 1
-    assert "0 solves run, 2 re-used, 1 failed" in capsys.readouterr().err
-    assert main([*base, "--solvers", "t-crash", "--retry-failed"]) == 1
-    assert "1 solves run, 1 re-used, 1 failed" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------- fuzzing the log reader

@@ -1,0 +1,316 @@
+"""The one engine that runs every benchmark definition.
+
+:func:`configure` applies a command line's choices to a definition (:class:`Settings`);
+:func:`plan` reads its instances and lists its tasks (one per instance x solver run x omega x
+seed, plus the exact reference solves, keyed by :func:`gtsp_bench.bench.tasks.task_key`; a
+batched benchmark groups them into :class:`~gtsp_bench.bench.tasks.BatchTask`); :func:`execute`
+runs what the task log does not hold yet through the worker pool or Dask (fresh processes, a hard
+kill past the limit, retries) and appends each record to the log; :func:`run_benchmark` does all
+of it, turns records into rows (:mod:`gtsp_bench.bench.rows`) and writes the outputs
+(:mod:`gtsp_bench.bench.outputs`). Nothing is solved in the calling process.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from gtsp_bench.bench.definitions import (
+    GLNS_MACHINE_FACTOR,
+    Benchmark,
+    Budget,
+    Committed,
+    Generated,
+    Gtsplib,
+    Run,
+    get_benchmark,
+)
+from gtsp_bench.bench.execute import Folder, Outcome, _say, execute
+from gtsp_bench.bench.rows import Cell
+from gtsp_bench.bench.sources import Entry, load_sources
+from gtsp_bench.bench.tasklog import exclusive_lock
+from gtsp_bench.bench.tasks import (
+    BatchTask,
+    Task,
+    batch_key,
+    task_key,
+)
+from gtsp_bench.errors import InputError
+
+#: The omega a distance-only task is keyed and run with (the solvers ignore it there).
+DISTANCE_OMEGA = 0.0
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What a command line changes in a definition (``None``: the definition's value)."""
+
+    quick: bool = False
+    out_dir: Path | None = None
+    solvers: tuple[str, ...] | None = None
+    ks: tuple[int, ...] | None = None
+    sets: tuple[str, ...] | None = None
+    names: tuple[str, ...] | None = None
+    instances: int | None = None
+    nodes: int | None = None
+    omegas: tuple[float, ...] | None = None
+    seeds: tuple[int, ...] | None = None
+    time_limit: float | None = None
+    jobs: int | None = None
+    executor: str = "local"
+    instance_dir: Path = Path("instances")
+    progress: bool = True
+    fresh: bool = False
+    retry_failed: bool = False
+    update_reference: bool = False
+    command: str = ""
+
+
+def _with_instances(src: Any, n: int) -> Any:
+    if isinstance(src, (Generated, Committed)):
+        return replace(src, instances=n)
+    if isinstance(src, Gtsplib) and src.per_group is not None:
+        return replace(src, per_group=n)
+    return src
+
+
+def _select_runs(bench: Benchmark, given: Sequence[str]) -> tuple[Run, ...]:
+    from gtsp_bench.registry import solver_names
+
+    if not bench.runs:  # every registered benchmark solver: any registered name may be asked for
+        valid = solver_names()
+        bad = [s for s in given if s not in valid]
+        if bad:
+            raise InputError(f"unknown solver {bad[0]!r} (valid: {', '.join(valid)})")
+        return tuple(Run(s) for s in given)
+    picked = []
+    for want in given:
+        mine = [r for r in bench.runs if r.name == want or r.solver == want or r.name.startswith(want + " ")]
+        if not mine:
+            if want in solver_names():
+                mine = [Run(want)]
+            else:
+                valid = ", ".join(dict.fromkeys(r.name for r in bench.runs))
+                raise InputError(
+                    f"--solvers: {want!r} is no solver of the {bench.name} benchmark "
+                    f"(its solvers: {valid}) nor a registered solver"
+                )
+        picked += [r for r in mine if r not in picked]
+    return tuple(picked)
+
+
+def configure(name: str, settings: Settings) -> Benchmark:
+    """The definition ``name`` with ``settings`` applied (its quick variant with ``quick``).
+
+    Raises
+    ------
+    InputError
+        An unknown benchmark or solver.
+    """
+    bench = get_benchmark(name)
+    if settings.quick:
+        bench = bench.quick_variant()
+    changes: dict[str, Any] = {}
+    if settings.sets is not None:
+        changes["sources"] = (Committed(settings.sets),)
+    if settings.instances is not None:
+        changes["sources"] = tuple(
+            _with_instances(s, settings.instances) for s in changes.get("sources", bench.sources)
+        )
+    if settings.nodes is not None:
+        changes["sources"] = tuple(
+            replace(s, nodes=settings.nodes) if isinstance(s, Generated) else s
+            for s in changes.get("sources", bench.sources)
+        )
+    if settings.solvers is not None:
+        changes["runs"] = _select_runs(bench, settings.solvers)
+    if settings.omegas is not None:
+        changes["omegas"] = settings.omegas
+    if settings.seeds is not None:
+        changes["seeds"] = settings.seeds
+    if settings.time_limit is not None:
+        changes["budget"] = Budget(settings.time_limit)
+    if settings.out_dir is not None:
+        changes["out_dir"] = str(settings.out_dir)
+    return replace(bench, **changes)
+
+
+def default_runs(bench: Benchmark) -> tuple[Run, ...]:
+    """A definition's runs; none given: every registered solver marked for benchmarks."""
+    if bench.runs:
+        return bench.runs
+    from gtsp_bench.registry import solver_specs
+
+    return tuple(Run(s.name) for s in solver_specs() if s.bench)
+
+
+def time_limit_of(bench: Benchmark, entry: Entry) -> float | None:
+    """The budget of one solve of ``entry`` (rounded to milliseconds, so keys are stable)."""
+    b = bench.budget
+    if b.factor is None:
+        return b.seconds
+    if entry.glns_s is None:
+        raise InputError(
+            f"{entry.stem}: no GLNS time for a budget relative to GLNS's (glns-45.csv); give --time-limit"
+        )
+    return round(max(0.01, b.factor * GLNS_MACHINE_FACTOR * entry.glns_s), 3)
+
+
+@dataclass
+class Plan:
+    """What a run of a grid benchmark solves: its entries, cells (the rows to come), tasks by key
+    (reference solves included) and the exact reference task of each point."""
+
+    entries: list[Entry]
+    cells: list[Cell]
+    tasks: dict[str, Task]
+    exact: dict[tuple[str, str, float | None], tuple[str, str]] = field(default_factory=dict)
+
+
+def plan(bench: Benchmark, settings: Settings) -> Plan:
+    """Read the instances and list the cells and tasks of a grid benchmark."""
+    from gtsp_bench.registry import solver_names
+
+    entries = load_sources(
+        bench.sources,
+        settings.instance_dir,
+        ks=settings.ks,
+        names=settings.names,
+        scratch=Path(bench.output_dir) / "instances",
+    )
+    runs = default_runs(bench)
+    registered = set(solver_names())
+    cells: list[Cell] = []
+    tasks: dict[str, Task] = {}
+    exact: dict[tuple[str, str, float | None], tuple[str, str]] = {}
+
+    def add(
+        e: Entry,
+        solver: str,
+        options: tuple[tuple[str, Any], ...],
+        w: float | None,
+        seed: int,
+        tl: float | None,
+    ) -> str:
+        run_w = DISTANCE_OMEGA if w is None else w
+        key = task_key(e.stored, solver, run_w, seed, tl, options)
+        tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options))
+        return key
+
+    for e in entries:
+        tl = time_limit_of(bench, e)
+        omegas: Sequence[float | None] = bench.omegas if e.stored.instance.is_uav else (None,)
+        for w in omegas:
+            for r in runs:
+                if r.max_k is not None and e.k > r.max_k:
+                    continue
+                for seed in bench.seeds:
+                    cells.append(Cell(e, r, w, seed, tl, add(e, r.solver, r.options, w, seed, tl)))
+            ref = next(
+                (s for s, k in bench.reference.exact if s in registered and (k is None or e.k <= k)), None
+            )
+            if ref is not None:
+                exact[(e.set, e.stem, w)] = (add(e, ref, (), w, 0, bench.reference.exact_time_limit), ref)
+    return Plan(entries, cells, tasks, exact)
+
+
+def batches(bench: Benchmark, p: Plan, todo: Sequence[Task]) -> list[Task | BatchTask]:
+    """``todo`` as jobs: in a batched benchmark, the cells' tasks of one set, K, run, omega and
+    seed become one :class:`BatchTask` (reference solves stay single)."""
+    if not bench.batched:
+        return list(todo)
+    wanted = {t.key for t in todo}
+    groups: dict[tuple[Any, ...], list[Task]] = {}
+    for c in p.cells:
+        if c.key in wanted:
+            groups.setdefault((c.entry.set, c.entry.k, c.run, c.omega, c.seed), []).append(p.tasks[c.key])
+    grouped = {t.key for g in groups.values() for t in g}
+    jobs: list[Task | BatchTask] = [t for t in todo if t.key not in grouped]
+    for members in groups.values():
+        unique = tuple(dict((t.key, t) for t in members).values())
+        jobs.append(BatchTask(batch_key(unique), unique[0].solver, unique, bench.repeats))
+    return jobs
+
+
+def jobs_for(bench: Benchmark, settings: Settings) -> int:
+    """Worker processes: ``--jobs``, else the definition's, else the cores."""
+    from gtsp_bench.checks import check_int
+
+    n = settings.jobs if settings.jobs is not None else bench.jobs or (os.cpu_count() or 1)
+    return check_int("jobs", n, 1)
+
+
+def run_benchmark(name: str, settings: Settings, *, say: Callable[[str], None] = _say) -> Outcome:
+    """Run the benchmark ``name`` with ``settings``: plan, execute, rows, outputs.
+
+    The run holds a lock on its output folder: a second run on the same folder stops at once
+    with an :class:`InputError` naming the lock.
+    """
+    from gtsp_bench.bench import outputs
+    from gtsp_bench.bench.executors import close_executors
+    from gtsp_bench.checks import check_executor
+
+    bench = configure(name, settings)
+    executor = check_executor(settings.executor)
+    out_dir = Path(bench.output_dir)
+    folder = Folder(out_dir, bench.budget.seconds or 0.0, jobs_for(bench, settings), executor)
+    t0 = time.perf_counter()
+    if bench.planner == "paper":
+        from gtsp_bench.bench.paper import paper_config, run_paper
+
+        config = paper_config(bench, settings, folder.jobs)  # bad options fail before any file
+        with exclusive_lock(folder.lock_path, "another gtsp-bench bench"):
+            try:
+                outcome = run_paper(bench, settings, config, say)
+            finally:
+                close_executors()
+        outcome.wall_s = time.perf_counter() - t0
+        return outcome
+    p = plan(bench, settings)  # bad sets or files fail before anything is written
+    order = [*dict.fromkeys(s for s, _ in bench.reference.exact), *(r.solver for r in default_runs(bench))]
+    with exclusive_lock(folder.lock_path, "another gtsp-bench bench"):
+        say(
+            f"{bench.name}: {len(p.entries)} instances, {len(p.cells)} solves in its rows, "
+            f"{bench.budget.describe()}; reference: {bench.reference.describe()}"
+        )
+        try:
+            outcome = execute(
+                folder,
+                p.tasks,
+                order,
+                fresh=settings.fresh,
+                retry_failed=settings.retry_failed,
+                progress=settings.progress,
+                group=lambda todo: batches(bench, p, todo),
+                say=say,
+            )
+        finally:
+            close_executors()
+        outputs.write_all(bench, settings, p, outcome, say)
+    outcome.wall_s = time.perf_counter() - t0
+    say(
+        f"done in {outcome.wall_s:.1f} s: {outcome.run} solves run, {outcome.cached} re-used, "
+        f"{outcome.failed} failed, {outcome.refused} refused"
+        + (f", {len(outcome.errors)} error(s)" if outcome.errors else "")
+        + (" (exit code 1: see the failed rows' notes)" if outcome.failed or outcome.errors else "")
+    )
+    return outcome
+
+
+__all__ = [
+    "DISTANCE_OMEGA",
+    "Outcome",
+    "Plan",
+    "Settings",
+    "batches",
+    "configure",
+    "default_runs",
+    "execute",
+    "plan",
+    "run_benchmark",
+    "time_limit_of",
+]

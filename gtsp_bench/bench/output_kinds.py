@@ -1,0 +1,340 @@
+"""The named outputs a benchmark definition may ask for (:data:`OUTPUTS`), each a function of the
+rows alone: ``(benchmark, rows, out_dir, settings, say) -> files written``.
+
+``profile``, ``gap-k``
+    the performance profile and the mean gap by K (CSV + PNG, :mod:`gtsp_bench.report.profiles`);
+``glns``
+    ``glns.md``: per instance, lns's mean gap, hits and worst run beside GLNS's published numbers
+    (``glns-45.csv``), and the three target lines;
+``doc-heuristics``, ``doc-learned``, ``doc-exact-scale``, ``doc-textbook``
+    a generated block of a documentation page (:data:`DOC_BLOCKS`), refreshed only when the run
+    wrote into the committed folder ``results/NAME`` of a checkout (``docs/`` beside it);
+``update-references``
+    the sets' ``reference.csv``: new rows for points without one, better tours for ``best_known``
+    rows (with ``--update-reference``, or always for the ``references`` benchmark).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import statistics
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from gtsp_bench.bench.definitions import Benchmark
+from gtsp_bench.data.io import atomic_write_text
+
+Output = Callable[[Benchmark, pd.DataFrame, Path, Any, Callable[[str], None]], list[Path]]
+
+
+def _as_sweep(df: pd.DataFrame) -> pd.DataFrame:
+    """The rows with the column names the profile functions read."""
+    return df.assign(solver=df["label"], gap_percent=df["gap_pct"])
+
+
+def _profile(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
+    from gtsp_bench.report import profiles
+    from gtsp_bench.report.figures import save_png
+
+    prof = profiles.performance_profile(_as_sweep(df))
+    atomic_write_text(out_dir / "profile.csv", prof.to_csv(index=False, float_format="%.10g"))
+    save_png(profiles.profile_figure(prof), out_dir / "profile.png")
+    return [out_dir / "profile.csv", out_dir / "profile.png"]
+
+
+def _gap_k(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
+    from gtsp_bench.report import profiles
+    from gtsp_bench.report.figures import save_png
+
+    sweep = _as_sweep(df)
+    if sweep.loc[sweep["gap_percent"].notna(), "K"].nunique() < 2:
+        return []
+    table = profiles.gap_by_k(sweep)
+    atomic_write_text(out_dir / "gap-k.csv", table.to_csv(index=False, float_format="%.10g"))
+    save_png(profiles.gap_k_figure(table), out_dir / "gap-k.png")
+    return [out_dir / "gap-k.csv", out_dir / "gap-k.png"]
+
+
+# ---------------------------------------------------------------------- tables for the docs
+def gap_time_cell(rows: pd.DataFrame, ms: bool = False) -> str:
+    """Mean gap and median time of the answered solves (``*``: a solve stopped at its limit;
+    ``(n/m)``: only n of m answered), else why none did."""
+    answered = rows[rows["objective"].notna()]
+    if answered.empty:
+        return "refused" if (rows["status"] == "refused").all() else "failed"
+    gaps = answered["gap_pct"].dropna()
+    gap = f"{gaps.mean():.2f}%" if len(gaps) else "-"
+    if ms:
+        time = f"{1000 * answered['runtime_s'].mean():.1f}ms"
+    else:
+        time = f"{statistics.median(answered['runtime_s']):.2f}s"
+    star = "*" if (answered["status"] == "time_limit").any() else ""
+    part = f" ({len(answered)}/{len(rows)})" if len(answered) < len(rows) else ""
+    return f"{gap} {time}{star}{part}"
+
+
+def proof_cell(rows: pd.DataFrame) -> str:
+    """Proven count, median time to the answer and the largest gap to the solver's own bound."""
+    proven = int((rows["status"] == "optimal").sum())
+    times = rows["runtime_s"].dropna()
+    median = f"{statistics.median(times):.2f}s" if len(times) else "-"
+    worst = rows["bound_gap_pct"].max()
+    gap = "" if proven == len(rows) or not math.isfinite(worst) else f", bound gap <= {worst:.3f}%"
+    return f"{proven}/{len(rows)} proven, {median}{gap}"
+
+
+def pivot_markdown(
+    df: pd.DataFrame, row: str, column: str, cell: Callable[[pd.DataFrame], str], row_title: str
+) -> str:
+    """A Markdown table: one line per value of ``row``, one column per value of ``column``."""
+    cols = list(dict.fromkeys(df[column]))
+    head = [
+        f"| {row_title} | " + " | ".join(f"{column}={c}" if column == "K" else str(c) for c in cols) + " |",
+        "|---|" + "---:|" * len(cols),
+    ]
+    lines = []
+    for value, g in df.groupby(row, sort=False):
+        cells = [cell(g[g[column] == c]) if (g[column] == c).any() else "-" for c in cols]
+        lines.append(f"| {value} | " + " | ".join(cells) + " |")
+    return "\n".join(head + lines)
+
+
+def _made_by(bench: Benchmark, df: pd.DataFrame, settings: Any) -> str:
+    limits = sorted({f"{v:g} s" for v in df["time_limit"].dropna()}) or ["no time limit"]
+    return (
+        f"Made by `gtsp-bench bench {bench.name}` from `results/{bench.name}/rows.csv` "
+        f"({len(df)} solves; {', '.join(limits[:3])}{' ...' if len(limits) > 3 else ''} per solve; "
+        f"the date, machine and command in its `manifest.json`)."
+    )
+
+
+def heuristics_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+    """The heuristics page's table: a line per group, a column per solver."""
+    listing = "\n".join(
+        f"- {s}: {', '.join(dict.fromkeys(g['instance']))}" for s, g in df.groupby("set", sort=False)
+    )
+    return (
+        f"{_made_by(bench, df, settings)}\n\n"
+        f"{pivot_markdown(df, 'set', 'label', gap_time_cell, 'group')}\n\n"
+        "Cells: mean gap to the reference / median solve time; `*`: some solves stopped at the "
+        "time limit; `(n/m)`: only n of m solves answered; `refused`: the solver declines the "
+        f"instances by design.\n\n{listing}"
+    )
+
+
+def learned_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+    """The learned page's table: a line per policy, a column per K (both omegas)."""
+    return (
+        f"{_made_by(bench, df, settings)}\n\n"
+        f"{pivot_markdown(df, 'label', 'K', lambda g: gap_time_cell(g, ms=True), 'solver')}\n\n"
+        "Cells: mean gap to the reference (K <= 10: the optimum by `dp`; above: the sets' "
+        "`reference.csv`) / batched milliseconds per instance."
+    )
+
+
+def exact_scale_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+    """The exact page's table at scale: a line per set, a column per K group."""
+    d = df.assign(group=df["set"] + " K=" + df["K"].astype(str))
+    return (
+        f"{_made_by(bench, d, settings)}\n\n"
+        f"{pivot_markdown(d, 'set', 'label', proof_cell, 'set')}\n\n"
+        "Cells: optima proven / solves, median seconds, and the largest gap to `milp`'s own "
+        "bound among the unproven."
+    )
+
+
+def textbook_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+    """The textbook models against milp and dp: a line per K, a column per model."""
+    return (
+        f"{_made_by(bench, df, settings)}\n\n"
+        f"{pivot_markdown(df, 'K', 'label', proof_cell, 'K')}\n\n"
+        "Cells: optima proven / solves, median seconds, and the largest gap to the model's own "
+        "bound among the unproven."
+    )
+
+
+#: Output name -> (page, block, renderer).
+DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
+    "doc-heuristics": ("docs/solvers/heuristics.md", "heuristics-table", heuristics_block),
+    "doc-learned": ("docs/solvers/learned.md", "learned-table", learned_block),
+    "doc-exact-scale": ("docs/solvers/exact.md", "exact-scale-table", exact_scale_block),
+    "doc-textbook": ("docs/solvers/exact.md", "textbook-table", textbook_block),
+}
+
+
+def committed_root(bench: Benchmark, out_dir: Path) -> Path | None:
+    """The checkout whose ``results/NAME`` is ``out_dir`` (it holds ``mkdocs.yml``), else None."""
+    out = out_dir.resolve()
+    root = out.parent.parent
+    if out.parent.name == "results" and out.name == bench.name and (root / "mkdocs.yml").is_file():
+        return root
+    return None
+
+
+def _doc(name: str) -> Output:
+    def write(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
+        from gtsp_bench.report.paper import refresh_blocks
+
+        page, block, renderer = DOC_BLOCKS[name]
+        root = committed_root(bench, out_dir)
+        if root is None:
+            return []
+        path = root / page
+        if not path.is_file():
+            say(f"warning: {path}: no such page; its table was not refreshed")
+            return []
+        refresh_blocks(path, {block: renderer(bench, df, settings)}, [block])
+        return [path]
+
+    return write
+
+
+# ---------------------------------------------------------------------- GLNS
+def glns_lines(df: pd.DataFrame) -> list[str]:
+    """Per instance: budget, mean gap, hits and worst run beside GLNS's C++ numbers; the targets."""
+    import csv
+
+    from gtsp_bench.bench.sources import glns_times
+    from gtsp_bench.data import gtsplib
+
+    with (gtsplib.folder() / "glns-45.csv").open(newline="") as f:
+        glns = {r["instance"]: r for r in csv.DictReader(f)}
+    glns_times()
+    lines = [
+        "| instance | budget s | mean gap % | hits | worst % | GLNS C++ gap % | GLNS hits | GLNS s |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    means, worsts, hit_any = [], [], 0
+    for name, g in df.groupby("instance", sort=False):
+        gaps = g["gap_pct"].dropna()
+        if gaps.empty:
+            continue
+        hits = int((gaps <= 1e-9).sum())
+        hit_any += hits > 0
+        means.append(gaps.mean())
+        worsts.append(gaps.max())
+        ref = glns.get(name, {})
+        lines.append(
+            f"| {name} | {g['time_limit'].iloc[0]:.2f} | {gaps.mean():.4f} | {hits}/{len(gaps)} | "
+            f"{gaps.max():.3f} | {ref.get('glns_cpp_mean_gap_pct', '-')} | "
+            f"{ref.get('glns_cpp_hits10', '-')}/10 | {ref.get('glns_cpp_mean_s', '-')} |"
+        )
+    if means:
+        lines += [
+            "",
+            f"- mean gap: {sum(means) / len(means):.4f} % over {len(means)} instances",
+            f"- instances at the best known at least once: {hit_any} of {len(means)}",
+            f"- worst run: {max(worsts):.4f} %",
+        ]
+    return lines
+
+
+def _glns(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
+    path = out_dir / "glns.md"
+    atomic_write_text(
+        path, f"# lns against GLNS\n\n{bench.budget.describe()}.\n\n" + "\n".join(glns_lines(df)) + "\n"
+    )
+    return [path]
+
+
+# ---------------------------------------------------------------------- reference.csv
+def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
+    """Per set folder, the reference rows the run's best tours give: the best objective of each
+    (instance, omega), ``optimal`` when a solve proved it, its best lower bound."""
+    from gtsp_bench.data.sets import ReferenceRow
+
+    out: dict[str, list[Any]] = {}
+    ok = df[df["objective"].notna()]
+    omega = ok["omega"].astype(float).fillna(-1.0)
+    for (s, inst, w), g in ok.groupby(["set", "instance", omega], sort=False):
+        best = g.loc[g["objective"].idxmin()]
+        proven = bool((g["status"] == "optimal").any())
+        lower = g["lower_bound"].max()
+        source = f"{best['label']} {best['time_limit']:g}s" + (
+            f" seed {int(best['seed'])}" if best["label"] == "lns" else ""
+        )
+        out.setdefault(s, []).append(
+            ReferenceRow(
+                inst,
+                None if w < 0 else float(w),
+                float(best["objective"]),
+                None if not math.isfinite(lower) else float(lower),
+                "optimal" if proven else "best_known",
+                source,
+                today,
+            )
+        )
+    return out
+
+
+def _update_references(
+    bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any
+) -> list[Path]:
+    from gtsp_bench.data.sets import read_reference, resolve_set, strictly_better, write_reference
+
+    if bench.name != "references" and not getattr(settings, "update_reference", False):
+        return []
+    today = dt.date.today().isoformat()
+    written = []
+    for set_name, rows in new_references(df, today).items():
+        try:
+            s = resolve_set(set_name, getattr(settings, "instance_dir", "instances"))
+        except Exception:
+            continue
+        if s.reference_path is None:
+            say(f"warning: {set_name}: GTSPLIB's values are GLKH's tours (best_known.csv); not updated")
+            continue
+        have = read_reference(s.reference_path)
+        merged = dict(have)
+        changed = []
+        for r in rows:
+            old = have.get((r.instance, r.omega))
+            if old is None or (
+                old.status != "optimal" and (strictly_better(r.value, old.value) or r.status == "optimal")
+            ):
+                merged[(r.instance, r.omega)] = r
+                changed.append(
+                    f"{r.instance} omega {r.omega}: {None if old is None else old.value!r} -> {r.value!r}"
+                )
+        if changed:
+            write_reference(
+                s.reference_path, sorted(merged.values(), key=lambda r: (r.instance, r.omega or -1.0))
+            )
+            written.append(s.reference_path)
+            for line in changed:
+                say(f"updated {s.reference_path}: {line}")
+    return written
+
+
+def _nothing(*_: Any) -> list[Path]:
+    return []
+
+
+OUTPUTS: dict[str, Output] = {
+    "profile": _profile,
+    "gap-k": _gap_k,
+    "glns": _glns,
+    "update-references": _update_references,
+    **{name: _doc(name) for name in DOC_BLOCKS},
+}
+
+
+def output_names() -> Sequence[str]:
+    """Every output a definition may name."""
+    return tuple(OUTPUTS)
+
+
+__all__ = [
+    "DOC_BLOCKS",
+    "OUTPUTS",
+    "gap_time_cell",
+    "glns_lines",
+    "new_references",
+    "output_names",
+    "pivot_markdown",
+    "proof_cell",
+]

@@ -1,0 +1,215 @@
+"""What a benchmark run writes: ``rows.csv``, ``summary.md``, ``manifest.json`` and its named outputs.
+
+Every output folder gets the three files: the rows (:data:`gtsp_bench.bench.rows.COLUMNS`), the
+summary per set and solver (also the command's answer on stdout) and the provenance
+(:func:`manifest`: git commit and whether the tree was dirty, package versions, CPU model, cores,
+RAM, the command line, the budget and reference rules, the SHA-256 of every instance file). A
+definition's ``outputs`` name more (:data:`OUTPUTS`): figures, GLNS's table, the generated
+blocks of a documentation page, the sets' improved ``reference.csv`` rows. Each output is a
+function of the rows alone, so :func:`render` redraws them from a committed ``rows.csv``
+(``gtsp-bench bench NAME --report-only``). Files are written atomically.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import platform
+import subprocess
+import sys
+from collections.abc import Callable, Mapping
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from gtsp_bench.bench.definitions import Benchmark
+from gtsp_bench.bench.rows import (
+    BELOW_OPTIMUM,
+    BETTER_THAN_BEST_KNOWN,
+    make_rows,
+    references,
+    summary_markdown,
+    summary_table,
+)
+from gtsp_bench.data.io import atomic_write_text
+
+#: Packages whose versions the manifest records (those installed).
+PACKAGES = (
+    "gtsp-bench",
+    "numpy",
+    "scipy",
+    "pandas",
+    "matplotlib",
+    "highspy",
+    "ortools",
+    "cvxpy",
+    "torch",
+    "numba",
+    "pyvrp",
+    "elkai",
+    "gurobipy",
+    "dask",
+    "distributed",
+)
+
+
+def _git(*args: str) -> str:
+    try:
+        return subprocess.run(
+            ["git", *args], capture_output=True, text=True, timeout=10, cwd=Path(__file__).resolve().parent
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _ram_gib() -> float | None:
+    try:
+        return round(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30, 1)
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def manifest(
+    bench: Benchmark, command: str, instances: Mapping[str, str], extra: Mapping[str, Any]
+) -> dict[str, Any]:
+    """The provenance of a run: where, with what, how (``instances``: path -> SHA-256)."""
+    versions = {}
+    for name in PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    commit = _git("rev-parse", "HEAD")
+    return {
+        "benchmark": bench.name,
+        "description": bench.description,
+        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        "command": command or " ".join(["gtsp-bench", *sys.argv[1:]]),
+        "git_commit": commit or None,
+        "git_dirty": bool(_git("status", "--porcelain", "--untracked-files=no")) if commit else None,
+        "python": platform.python_version(),
+        "packages": versions,
+        "cpu_model": _cpu_model(),
+        "cores": os.cpu_count(),
+        "ram_gib": _ram_gib(),
+        "platform": platform.platform(),
+        "budget_rule": bench.budget.describe(),
+        "reference_rule": bench.reference.describe(),
+        "omegas": list(bench.omegas),
+        "seeds": list(bench.seeds),
+        "batched": bench.batched,
+        "repeats": bench.repeats,
+        "sources": [s.describe() for s in bench.sources],
+        "solvers": [{"solver": r.solver, "label": r.name, "options": dict(r.options)} for r in bench.runs],
+        **extra,
+        "instances": dict(sorted(instances.items())),
+    }
+
+
+def _rel(path: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def write_core(
+    out_dir: Path,
+    bench: Benchmark,
+    df: pd.DataFrame,
+    command: str,
+    instances: Mapping[str, str],
+    extra: Mapping[str, Any],
+) -> tuple[list[Path], str]:
+    """Write ``rows.csv``, ``summary.md`` and ``manifest.json``; the paths and the summary text."""
+    rows_path, summary_path, manifest_path = (
+        out_dir / "rows.csv",
+        out_dir / "summary.md",
+        out_dir / "manifest.json",
+    )
+    atomic_write_text(rows_path, df.to_csv(index=False, float_format="%.10g"))
+    text = summary_markdown(summary_table(df))
+    atomic_write_text(summary_path, f"# {bench.name}\n\n{bench.description}.\n\n{text}")
+    atomic_write_text(manifest_path, json.dumps(manifest(bench, command, instances, extra), indent=1) + "\n")
+    return [rows_path, summary_path, manifest_path], text
+
+
+def errors_of(df: pd.DataFrame) -> list[str]:
+    """Rows that mean a wrong solver or reference: tours below a proven optimum, and proven
+    optima of one point that disagree."""
+    errors = [
+        f"{r.set}/{r.instance} omega {r.omega}: {r.label} seed {r.seed} found {r.objective!r}, "
+        f"{BELOW_OPTIMUM} {r.reference_value!r} ({r.reference_source})"
+        for r in df[df["note"].str.contains(BELOW_OPTIMUM, regex=False)].itertuples()
+    ]
+    proven = df[df["status"] == "optimal"]
+    for (s, i, w), g in proven.groupby(["set", "instance", proven["omega"].astype(float).fillna(-1.0)]):
+        lo, hi = g["objective"].min(), g["objective"].max()
+        if hi - lo > 1e-6 * max(1.0, abs(lo)):
+            errors.append(
+                f"{s}/{i} omega {w:g}: proven optima disagree: "
+                + ", ".join(f"{r.label} {r.objective!r}" for r in g.itertuples())
+            )
+    return errors
+
+
+def write_all(bench: Benchmark, settings: Any, p: Any, outcome: Any, say: Callable[[str], None]) -> None:
+    """The rows of a grid run and every output of its definition."""
+    table_refs = references(type(bench.reference)(table=True), p.cells, {}, {})
+    refs = references(bench.reference, p.cells, outcome.records, p.exact)
+    df = make_rows(
+        bench.name,
+        p.cells,
+        outcome.records,
+        refs,
+        {k: v for k, v in table_refs.items() if v.kind != "best_found"},
+    )
+    out_dir = Path(bench.output_dir)
+    instances = {_rel(e.stored.path): e.sha256 for e in p.entries}
+    extra = {
+        "tasks": outcome.tasks,
+        "reused": outcome.cached,
+        "run": outcome.run,
+        "failed": outcome.failed,
+        "refused": outcome.refused,
+        "jobs": settings.jobs,
+        "executor": settings.executor,
+    }
+    written, text = write_core(out_dir, bench, df, settings.command, instances, extra)
+    outcome.errors += errors_of(df)
+    for e in outcome.errors:
+        say(f"error: {e}")
+    for r in df[df["note"].str.contains(BETTER_THAN_BEST_KNOWN, regex=False)].itertuples():
+        say(f"{BETTER_THAN_BEST_KNOWN}: {r.set}/{r.instance}: {r.label} seed {r.seed} found {r.objective!r}")
+    written += render(bench, df, out_dir, settings, say)
+    outcome.written = written
+    outcome.answer = text
+    say("wrote " + ", ".join(str(w) for w in written))
+
+
+def render(
+    bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Callable[[str], None]
+) -> list[Path]:
+    """Every named output of ``bench`` from its rows; the files written."""
+    from gtsp_bench.bench.output_kinds import OUTPUTS
+
+    written: list[Path] = []
+    for name in bench.outputs:
+        written += OUTPUTS[name](bench, df, out_dir, settings, say)
+    return written
+
+
+__all__ = ["PACKAGES", "errors_of", "manifest", "render", "write_all", "write_core"]
