@@ -103,22 +103,32 @@ def pivot_markdown(
     return "\n".join(head + lines)
 
 
-def _made_by(bench: Benchmark, df: pd.DataFrame, settings: Any) -> str:
+def _made_by(bench: Benchmark, df: pd.DataFrame, command: str) -> str:
     limits = sorted({f"{v:g} s" for v in df["time_limit"].dropna()}) or ["no time limit"]
     return (
-        f"Made by `gtsp-bench bench {bench.name}` from `results/{bench.name}/rows.csv` "
+        f"Made by `{command or 'gtsp-bench bench ' + bench.name}` into `results/{bench.name}/rows.csv` "
         f"({len(df)} solves; {', '.join(limits[:3])}{' ...' if len(limits) > 3 else ''} per solve; "
-        f"the date, machine and command in its `manifest.json`)."
+        f"the date and the machine in its `manifest.json`)."
     )
 
 
-def heuristics_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+def run_command(out_dir: Path) -> str:
+    """The command a run into ``out_dir`` was made with (its ``manifest.json``), else ``""``."""
+    import json
+
+    try:
+        return str(json.loads((out_dir / "manifest.json").read_text())["command"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return ""
+
+
+def heuristics_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The heuristics page's table: a line per group, a column per solver."""
     listing = "\n".join(
         f"- {s}: {', '.join(dict.fromkeys(g['instance']))}" for s, g in df.groupby("set", sort=False)
     )
     return (
-        f"{_made_by(bench, df, settings)}\n\n"
+        f"{_made_by(bench, df, command)}\n\n"
         f"{pivot_markdown(df, 'set', 'label', gap_time_cell, 'group')}\n\n"
         "Cells: mean gap to the reference / median solve time; `*`: some solves stopped at the "
         "time limit; `(n/m)`: only n of m solves answered; `refused`: the solver declines the "
@@ -126,31 +136,31 @@ def heuristics_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -
     )
 
 
-def learned_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+def learned_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The learned page's table: a line per policy, a column per K (both omegas)."""
     return (
-        f"{_made_by(bench, df, settings)}\n\n"
+        f"{_made_by(bench, df, command)}\n\n"
         f"{pivot_markdown(df, 'label', 'K', lambda g: gap_time_cell(g, ms=True), 'solver')}\n\n"
         "Cells: mean gap to the reference (K <= 10: the optimum by `dp`; above: the sets' "
         "`reference.csv`) / batched milliseconds per instance."
     )
 
 
-def exact_scale_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+def exact_scale_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The exact page's table at scale: a line per set, a column per K group."""
     d = df.assign(group=df["set"] + " K=" + df["K"].astype(str))
     return (
-        f"{_made_by(bench, d, settings)}\n\n"
+        f"{_made_by(bench, d, command)}\n\n"
         f"{pivot_markdown(d, 'set', 'label', proof_cell, 'set')}\n\n"
         "Cells: optima proven / solves, median seconds, and the largest gap to `milp`'s own "
         "bound among the unproven."
     )
 
 
-def textbook_block(bench: Benchmark, df: pd.DataFrame, settings: Any = None) -> str:
+def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The textbook models against milp and dp: a line per K, a column per model."""
     return (
-        f"{_made_by(bench, df, settings)}\n\n"
+        f"{_made_by(bench, df, command)}\n\n"
         f"{pivot_markdown(df, 'K', 'label', proof_cell, 'K')}\n\n"
         "Cells: optima proven / solves, median seconds, and the largest gap to the model's own "
         "bound among the unproven."
@@ -187,7 +197,7 @@ def _doc(name: str) -> Output:
         if not path.is_file():
             say(f"warning: {path}: no such page; its table was not refreshed")
             return []
-        refresh_blocks(path, {block: renderer(bench, df, settings)}, [block])
+        refresh_blocks(path, {block: renderer(bench, df, run_command(out_dir))}, [block])
         return [path]
 
     return write
