@@ -28,6 +28,7 @@ from gtsp_bench.cli.bench import add_bench_parser
 from gtsp_bench.errors import InputError, OneLineParser, SolverError
 
 if TYPE_CHECKING:
+    from gtsp_bench.solver import Result
     from gtsp_bench.solvers.learned.recipes import TrainConfig
 
 DEFAULT_OMEGA = 0.5
@@ -39,6 +40,8 @@ examples:
   gtsp-bench solve k7.json --solver greedy --omega 0.3
   gtsp-bench solve k7.json --solver brute --json > sol.json
   gtsp-bench evaluate k7.json --solution sol.json --omega 0.3
+  gtsp-bench solve k7.json --solver dp --omega 0.3 --tour dp.tour
+  gtsp-bench plot k7.json --solution sol.json --solution dp.tour --omega 0.3 -o k7.png
   gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver greedy
   gtsp-bench solvers
   gtsp-bench bench --list
@@ -93,17 +96,37 @@ def build_parser() -> argparse.ArgumentParser:
                    metavar="KEY=VALUE", help="solver option, repeatable (e.g. -p ants=50)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
     p.add_argument("-o", "--output", metavar="SOL.json", help="also write the result JSON here")
+    p.add_argument("--tour", metavar="OUT.tour",
+                   help="also write the tour as a TSPLIB tour file here (.tour or .tour.gz)")
     p.set_defaults(handler=_cmd_solve)
 
     p = sub.add_parser("evaluate", help="re-price a solution file",
-                       description="Check and price a solution (a JSON object with 'order' and "
-                       "'heads', as 'solve --json' prints) on an instance.")
+                       description="Check and price a solution on an instance: a JSON object with "
+                       "'order' and 'heads' (as 'solve --json' prints), or a TSPLIB tour file "
+                       "(.tour or .tour.gz, as 'solve --tour' writes).")
     p.add_argument("file", metavar="FILE", help="instance file (.json, .gtsp, or either .gz)")
-    p.add_argument("--solution", required=True, metavar="SOL.json", help="solution file")
+    p.add_argument("--solution", required=True, metavar="SOL",
+                   help="solution file: a TSPLIB tour if named .tour or .tour.gz, else JSON")
     p.add_argument("--omega", "-w", type=arg_float, default=DEFAULT_OMEGA, metavar="W",
                    help=f"weight of the ground energy in [0, 1] (default: {DEFAULT_OMEGA})")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a summary")
     p.set_defaults(handler=_cmd_evaluate)
+
+    p = sub.add_parser("plot", help="draw an instance and its solutions as a PNG",
+                       description="Draw an instance (the base station, each cluster's nodes: its "
+                       "candidate heads) and, for each --solution, the chosen heads and the tour in "
+                       "a panel of its own, titled with the objective the evaluator gives it. A "
+                       "GTSPLIB file is drawn from its coordinates (there is no base station); a file "
+                       "of EXPLICIT weights without coordinates is refused.")
+    p.add_argument("file", metavar="FILE", help="instance file (.json, .gtsp, or either .gz)")
+    p.add_argument("--solution", action="append", default=[], metavar="SOL",
+                   help="solution file: a TSPLIB tour if named .tour or .tour.gz, else JSON; "
+                   "repeatable, one panel each")
+    p.add_argument("--omega", "-w", type=arg_float, default=DEFAULT_OMEGA, metavar="W",
+                   help=f"weight of the ground energy in [0, 1] that prices the solutions (default: "
+                   f"{DEFAULT_OMEGA}; ignored for .gtsp)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="PNG file to write")
+    p.set_defaults(handler=_cmd_plot)
 
     p = sub.add_parser("train", help="train a learned policy (drl, am) on generated instances",
                        description="Train a learned policy by REINFORCE on instances drawn fresh "
@@ -231,9 +254,11 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     from gtsp_bench.checks import check_omega, check_time_limit
-    from gtsp_bench.data.io import atomic_write_text, read_instance
+    from gtsp_bench.data.io import atomic_write_text, check_tour_name, read_instance, write_tour
     from gtsp_bench.registry import get_solver, run_solver
 
+    if args.tour:
+        check_tour_name(args.tour)  # before a long solve
     instance = read_instance(args.file)
     options = dict(args.param)
     solver = get_solver(args.solver, **options)
@@ -249,25 +274,33 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     text = json.dumps(result.to_dict())
     if args.output:
         atomic_write_text(args.output, text + "\n")
+    if args.tour:
+        write_tour(instance, args.tour, result.order, result.heads, _tour_comments(result))
     _say(text if args.json else result.summary())
     return 0
 
 
+def _tour_comments(result: Result) -> list[str]:
+    """The COMMENT lines of a tour file: its length (GLKH's first line) or energy, and its solver."""
+    if result.energy is None:
+        first = f"Length = {result.objective:.12g}"
+    else:
+        first = (f"Energy = {result.objective:.12g} J at omega = {result.omega:g}, "
+                 f"length = {result.distance:.12g} m")
+    return [first, f"Found by gtsp-bench solve --solver {result.solver} ({result.status})"]
+
+
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from gtsp_bench.checks import check_omega
-    from gtsp_bench.data.io import read_instance, read_solution
+    from gtsp_bench.data.io import read_instance, read_solution_file
     from gtsp_bench.energy import evaluate
-    from gtsp_bench.errors import InfeasibleSolutionError
     from gtsp_bench.solver import Result
 
     instance = read_instance(args.file)
-    order, heads = read_solution(args.solution)
+    order, heads = read_solution_file(args.solution, instance)
     omega = check_omega(args.omega) if instance.is_uav else None
     start = time.perf_counter()
-    try:
-        ev = evaluate(instance, omega, order, heads)
-    except InfeasibleSolutionError as e:
-        raise InputError(f"{args.solution}: infeasible solution: {e}") from None
+    ev = evaluate(instance, omega, order, heads)
     result = Result(
         instance=instance.name, solver=None, omega=omega,
         order=tuple(order), heads=tuple(heads), objective=ev.objective, energy=ev.energy,
@@ -275,6 +308,35 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         runtime_s=time.perf_counter() - start,
     )
     _say(json.dumps(result.to_dict()) if args.json else result.summary())
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from gtsp_bench.checks import check_omega
+    from gtsp_bench.data.io import read_instance, read_solution_file
+    from gtsp_bench.energy import evaluate
+    from gtsp_bench.report.figures import save_png, tour_figure
+    from gtsp_bench.report.plots import check_drawable
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".png":
+        raise InputError(f"{out}: plot writes PNG; name the output FILE.png")
+    instance = read_instance(args.file)
+    omega = check_omega(args.omega) if instance.is_uav else None
+    try:
+        check_drawable(instance)
+    except InputError as e:
+        raise InputError(f"{args.file}: {e}") from None
+    tours = []
+    for path in args.solution:
+        order, heads = read_solution_file(path, instance)
+        ev = evaluate(instance, omega, order, heads)
+        value = (f"{ev.objective:.2f} J (omega = {omega:g})" if omega is not None
+                 else f"length {ev.objective:.12g}")
+        tours.append((f"{Path(path).name}: {value}", order, heads))
+    save_png(tour_figure(instance, tours), out)
+    drawn = f"{len(tours)} solution{'' if len(tours) == 1 else 's'}" if tours else "the instance alone"
+    print(f"wrote {out} ({drawn})", file=sys.stderr)
     return 0
 
 
@@ -353,6 +415,7 @@ _MEMORY_HINTS = {
     "solve": "try a smaller instance, a solver that needs less memory, or a lower "
              "-p max_memory_gb (dp)",
     "evaluate": "try a smaller instance",
+    "plot": "try a smaller instance",
     "train": "use a smaller --batch or --val-size",
     "bench": "use fewer --jobs, a smaller -K or fewer --instances",
     "solvers": "close other programs",

@@ -11,25 +11,27 @@ import gzip
 import os
 import secrets
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 
 from gtsp_bench.data.parse import (
     format_gtsp,
     format_json_instance,
+    format_tour,
     parse_gtsp,
     parse_json_instance,
     parse_solution,
     parse_tour,
     tour_to_solution,
 )
-from gtsp_bench.errors import InputError
+from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.instance import Instance
 
 #: Instance file suffixes this package reads and writes, each also gzip-compressed (``+ ".gz"``).
 INSTANCE_SUFFIXES = (".json", ".gtsp")
 #: Suffix of a gzip-compressed file.
 GZIP_SUFFIX = ".gz"
-#: Suffix of a TSPLIB tour file (GTSPLIB's best tours).
+#: Suffix of a TSPLIB tour file (GTSPLIB's best tours, and the tours ``solve --tour`` writes).
 TOUR_SUFFIX = ".tour"
 
 
@@ -123,9 +125,10 @@ def read_solution(path: str | os.PathLike[str]) -> tuple[list[int], list[int]]:
 
 
 def read_tour(path: str | os.PathLike[str], instance: Instance) -> tuple[list[int], list[int]]:
-    """Read a TSPLIB tour file (``.tour`` or ``.tour.gz``) of a GTSPLIB instance as ``(order, heads)``.
+    """Read a TSPLIB tour file (``.tour`` or ``.tour.gz``) of ``instance`` as ``(order, heads)``.
 
-    ``instance`` is the instance read from the file the tour's node ids refer to.
+    ``instance`` is the instance the tour's node ids refer to (for a GTSPLIB tour: the instance
+    read from that file); :func:`gtsp_bench.data.parse.tour_node_ids` says how ids name nodes.
     """
     p = Path(path)
     try:
@@ -136,17 +139,72 @@ def read_tour(path: str | os.PathLike[str], instance: Instance) -> tuple[list[in
         raise InputError(f"{p}: {e}") from None
 
 
+def read_solution_file(path: str | os.PathLike[str], instance: Instance) -> tuple[list[int], list[int]]:
+    """Read a feasible solution of ``instance`` as ``(order, heads)`` from a TSPLIB tour file
+    (a name ending in ``.tour`` or ``.tour.gz``) or a solution JSON file (any other name).
+
+    Raises
+    ------
+    InputError
+        ``"<path>: <problem>"`` for a file that cannot be read, and
+        ``"<path>: infeasible solution: <problem>"`` for a solution that is not one of
+        ``instance`` (a cluster missed or visited twice, a head out of range).
+    """
+    p = Path(path)
+    order, heads = read_tour(p, instance) if format_suffix(p) == TOUR_SUFFIX else read_solution(p)
+    try:
+        instance.check_solution(order, heads)
+    except InfeasibleSolutionError as e:
+        raise InputError(f"{p}: infeasible solution: {e}") from None
+    return order, heads
+
+
+def check_tour_name(path: str | os.PathLike[str]) -> Path:
+    """``path`` as a :class:`~pathlib.Path` when it names a tour file (``.tour``, ``.tour.gz``).
+
+    Raises
+    ------
+    InputError
+        ``"<path>: a tour file's name ends in .tour ..."`` otherwise: only such a name is read
+        back as a tour (:func:`read_solution_file`).
+    """
+    p = Path(path)
+    if format_suffix(p) != TOUR_SUFFIX:
+        raise InputError(f"{p}: a tour file's name ends in {TOUR_SUFFIX} (or {TOUR_SUFFIX}{GZIP_SUFFIX})")
+    return p
+
+
+def write_tour(instance: Instance, path: str | os.PathLike[str], order: Sequence[int],
+               heads: Sequence[int], comments: Sequence[str] = ()) -> Path:
+    """Write a solution of ``instance`` atomically as a TSPLIB tour file (``.tour``, or gzip-
+    compressed ``.tour.gz``): :func:`gtsp_bench.data.parse.format_tour`, with ``COMMENT`` lines.
+
+    Raises
+    ------
+    InputError
+        For a name that does not end in ``.tour`` or ``.tour.gz``, a folder that cannot be
+        written, or a solution that is not one of ``instance``.
+    """
+    p = check_tour_name(path)
+    _write_text(p, format_tour(instance, order, heads, comments))
+    return p
+
+
 def write_instance(instance: Instance, path: str | os.PathLike[str]) -> Path:
     """Write an instance atomically, as JSON or GTSPLIB by the file suffix; gzip-compressed when
     the name ends in ``.gz`` (reproducibly: no name or time stamp in the gzip header)."""
     p = Path(path)
     suffix = _instance_suffix(p)
-    text = format_gtsp(instance) if suffix == ".gtsp" else format_json_instance(instance)
+    _write_text(p, format_gtsp(instance) if suffix == ".gtsp" else format_json_instance(instance))
+    return p
+
+
+def _write_text(p: Path, text: str) -> None:
+    """Write ``text`` atomically; gzip-compressed when the name ends in ``.gz`` (reproducibly)."""
     if p.suffix.lower() == GZIP_SUFFIX:
         atomic_write_bytes(p, gzip.compress(text.encode("utf-8"), mtime=0))
     else:
         atomic_write_text(p, text)
-    return p
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:

@@ -16,7 +16,8 @@ Two instance formats:
   become an instance with ``symmetric=False``.
 
 And TSPLIB tour files (``TOUR_SECTION`` of 1-based node ids, ``-1`` at the end), the form in which
-GTSPLIB's best tours are given: :func:`parse_tour`, then :func:`tour_to_solution`.
+GTSPLIB's best tours are given: :func:`parse_tour`, then :func:`tour_to_solution`; written by
+:func:`format_tour`, with node ids as :func:`tour_node_ids` defines them (a UAV instance's too).
 
 Every function raises :class:`~gtsp_bench.errors.InputError` with a message that names the
 problem; the I/O layer prefixes the file name.
@@ -515,35 +516,78 @@ def parse_tour(text: str) -> list[int]:
     return nodes
 
 
+def tour_node_ids(instance: Instance) -> np.ndarray:
+    """The node id that names each node (in global order) in a tour file: ``(n,)``, 1-based.
+
+    For an instance read from a GTSPLIB file these are the file's node ids (``meta["node_ids"]``);
+    for any other instance, a UAV instance included, node ``offsets[k] + i + 1`` is node ``i`` of
+    cluster ``k``: the nodes numbered 1..n in cluster order, as in the JSON file (and as
+    :func:`format_gtsp` numbers them). The depot is never in a tour file.
+    """
+    file_ids = None if instance.is_uav else instance.meta.get("node_ids")
+    if file_ids is None:
+        return np.arange(1, instance.n_nodes + 1)
+    ids = np.asarray(file_ids, dtype=np.int64)
+    if ids.shape != (instance.n_nodes,) or len(np.unique(ids)) != len(ids):
+        raise InputError(f"{instance.name}: its node ids (meta['node_ids']) do not match its "
+                         f"{instance.n_nodes} nodes")
+    return ids
+
+
+def format_tour(instance: Instance, order: Sequence[int], heads: Sequence[int],
+                comments: Sequence[str] = ()) -> str:
+    """TSPLIB tour text (the form of GLKH's tours) of a solution: its heads' node ids in visiting
+    order, one per cluster (:func:`tour_node_ids`; a UAV tour starts and ends at the depot,
+    which is not listed).
+
+    Raises
+    ------
+    InfeasibleSolutionError
+        For a solution that is not one of ``instance`` (:meth:`Instance.check_solution`).
+    """
+    order_arr, heads_arr = instance.check_solution(order, heads)
+    ids = tour_node_ids(instance)[instance.offsets[order_arr] + heads_arr[order_arr]]
+    lines = [f"NAME : {instance.name}.tour"]
+    lines += [f"COMMENT : {' '.join(c.split())}" for c in comments]
+    lines += ["TYPE : TOUR", f"DIMENSION : {len(ids)}", "TOUR_SECTION"]
+    lines += [str(v) for v in ids.tolist()]
+    lines += ["-1", "EOF"]
+    return "\n".join(lines) + "\n"
+
+
 def tour_to_solution(instance: Instance, node_ids: Sequence[int]) -> tuple[list[int], list[int]]:
-    """Turn a tour of a GTSPLIB file's node ids (1-based) into ``(order, heads)``.
+    """Turn a tour's node ids (1-based, :func:`tour_node_ids`) into ``(order, heads)``.
 
     Parameters
     ----------
     instance
-        The instance read from that file (its ``meta["node_ids"]`` maps its nodes to the file's).
+        The instance the tour is of (for a GTSPLIB file: the one read from that file, whose
+        ``meta["node_ids"]`` maps its nodes to the file's).
     node_ids
         One node of each cluster, in visiting order.
 
     Raises
     ------
     InputError
-        For an instance without the file's node ids, or a node that is not in the file. A tour
-        that misses or repeats a cluster is left to :meth:`Instance.check_solution`.
+        For a tour that names a node the instance does not have, or lists more or fewer nodes
+        than it has clusters (both: a tour of another instance, most likely). A tour that
+        misses or repeats a cluster is left to :meth:`Instance.check_solution`.
     """
-    file_ids = instance.meta.get("node_ids")
-    if file_ids is None:
-        raise InputError(f"{instance.name} was not read from a GTSPLIB file: it has no file node ids")
-    position = {int(v): i for i, v in enumerate(file_ids)}
-    cluster_of = instance.cluster_of
-    offsets = instance.offsets
-    order: list[int] = []
-    heads = [-1] * instance.n_clusters
+    ids = tour_node_ids(instance)
+    position = {int(v): i for i, v in enumerate(ids.tolist())}
     for v in node_ids:
         if v not in position:
-            raise InputError(f"tour names node {v}, which is not in {instance.name}")
+            raise InputError(f"tour names node {v}, which is not in {instance.name} "
+                             f"(its nodes are {int(ids.min())}..{int(ids.max())})")
+    k = instance.n_clusters
+    if len(node_ids) != k:
+        raise InputError(f"the tour lists {len(node_ids)} nodes, but a tour of {instance.name} lists "
+                         f"one node of each of its {k} clusters")
+    order: list[int] = []
+    heads = [-1] * k
+    for v in node_ids:
         node = position[v]
-        k = int(cluster_of[node])
-        order.append(k)
-        heads[k] = node - int(offsets[k])
+        c = int(instance.cluster_of[node])
+        order.append(c)
+        heads[c] = node - int(instance.offsets[c])
     return order, heads

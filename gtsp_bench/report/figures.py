@@ -1,10 +1,11 @@
 """The figures of the paper's experiments, laid out from their tidy tables by the plot
-functions of :mod:`gtsp_bench.report.plots`, and written as PNG."""
+functions of :mod:`gtsp_bench.report.plots`, the tour pictures of ``gtsp-bench plot``, and
+writing them as PNG."""
 
 from __future__ import annotations
 
 import io
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -72,6 +73,30 @@ def experiment_figure(experiment: str, df: pd.DataFrame, first: Mapping[int, Ins
                                       title=f"K = {k}, omega = {omegas[c]:g}")
         return fig
     raise ValueError(experiment)
+
+
+#: Most panels side by side in a tour figure; more start a new row.
+TOUR_COLUMNS = 3
+
+
+def tour_figure(instance: Instance, tours: Sequence[tuple[str, Sequence[int], Sequence[int]]]) -> Any:
+    """One panel per ``(title, order, heads)`` drawn by :func:`plots.plot_tour`, side by side (at
+    most :data:`TOUR_COLUMNS` in a row), under the instance's name; the instance alone when
+    ``tours`` is empty."""
+    ncols = min(max(len(tours), 1), TOUR_COLUMNS)
+    nrows = -(-max(len(tours), 1) // ncols)
+    fig, axes = _figure(nrows, ncols, (4.8, 4.8))
+    if not tours:
+        plots.plot_tour(instance, ax=axes[0, 0], title=instance.name)
+        return fig
+    for i, ax in enumerate(axes.flat):
+        if i >= len(tours):
+            ax.set_visible(False)
+            continue
+        title, order, heads = tours[i]
+        plots.plot_tour(instance, order, heads, ax=ax, title=title)
+    fig.suptitle(instance.name, fontsize=11)
+    return fig
 
 
 def training_figure(df: pd.DataFrame) -> Any:

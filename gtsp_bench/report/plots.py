@@ -1,5 +1,5 @@
-"""Plots of the benchmark tables; each function draws on ``ax`` (a new figure if ``None``) and
-returns the Axes.
+"""Plots of the benchmark tables and of instances and tours; each function draws on ``ax`` (a new
+figure if ``None``) and returns the Axes.
 
 The runner builds its figures with :class:`matplotlib.figure.Figure` (no pyplot, no display
 needed); pyplot is imported only when a function is called without ``ax``.
@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.report.paper import PAPER_SOLVERS
 
@@ -144,6 +145,95 @@ def plot_trajectory(instance: Instance, tours: Mapping[str, tuple[Sequence[int],
     if title:
         ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="best")
+    return ax
+
+
+def check_drawable(instance: Instance) -> None:
+    """Raise :class:`InputError` when ``instance`` has no coordinates to draw: a GTSPLIB file of
+    EXPLICIT weights without a ``DISPLAY_DATA_SECTION``."""
+    if not np.all(np.isfinite(instance.coords)):
+        raise InputError("no node coordinates to draw: the file gives EXPLICIT weights without "
+                         "a DISPLAY_DATA_SECTION")
+
+
+def _convex_hull(points: np.ndarray) -> np.ndarray:
+    """The corners of the convex hull of ``(m, 2)`` points, counter-clockwise (Andrew's monotone
+    chain); fewer than three for points on a line."""
+    pts = [tuple(p) for p in np.unique(points, axis=0).tolist()]  # sorted by x, then y
+    if len(pts) < 3:
+        return np.array(pts)
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        chain: list[tuple[float, float]] = []
+        for x, y in seq:
+            while len(chain) >= 2 and ((chain[-1][0] - chain[-2][0]) * (y - chain[-2][1])
+                                       - (chain[-1][1] - chain[-2][1]) * (x - chain[-2][0])) <= 0:
+                chain.pop()
+            chain.append((x, y))
+        return chain[:-1]
+
+    return np.array(half(pts) + half(pts[::-1]))
+
+
+def plot_tour(instance: Instance, order: Sequence[int] | None = None, heads: Sequence[int] | None = None,
+              ax: Any = None, title: str | None = None) -> Any:
+    """An instance and one solution: the base station, each cluster (its candidate heads, in the
+    cluster's colour, on its shaded hull), the chosen heads and the closed tour through them.
+
+    Parameters
+    ----------
+    instance
+        An instance with coordinates (:func:`check_drawable`); GEO and GEOM coordinates (latitude,
+        longitude) are drawn with longitude across.
+    order, heads
+        A feasible solution as in :class:`gtsp_bench.solver.Result`, or ``None`` for the instance
+        alone.
+    title
+        The Axes title.
+    """
+    from matplotlib import colormaps
+    from matplotlib.collections import PolyCollection
+
+    check_drawable(instance)
+    ax = _axes(ax)
+    geo = instance.edge_weight_type in ("GEO", "GEOM")
+    axes_of = [1, 0] if geo else [0, 1]  # (latitude, longitude): longitude across
+    colors = colormaps["tab20"](np.arange(instance.n_clusters) % 20)
+    hulls, hull_colors = [], []
+    for k, pts in enumerate(instance.clusters):
+        hull = _convex_hull(pts)
+        if len(hull) >= 3:
+            hulls.append(hull[:, axes_of])
+            hull_colors.append(colors[k])
+    if hulls:
+        ax.add_collection(PolyCollection(hulls, facecolors=hull_colors, alpha=0.12, edgecolors="none",
+                                         zorder=0))
+    xy = instance.coords[:, axes_of]
+    ax.scatter(xy[:, 0], xy[:, 1], s=6, c=colors[instance.cluster_of], zorder=1,
+               label="candidate heads")
+    if instance.n_clusters <= 30:
+        for k, pts in enumerate(instance.clusters):
+            ax.annotate(f"G{k + 1}", pts.mean(axis=0)[axes_of], xytext=(0, 12), textcoords="offset points",
+                        fontsize=7, ha="center", color="dimgray")
+    depot = None if instance.depot is None else instance.depot[axes_of]
+    if depot is not None:
+        ax.scatter([depot[0]], [depot[1]], marker="s", s=50, color="black", zorder=4, label="base station")
+    if order is not None and heads is not None:
+        order_arr, heads_arr = instance.check_solution(order, heads)
+        pts = xy[instance.offsets[order_arr] + heads_arr[order_arr]]
+        path = np.vstack([pts, pts[:1]]) if depot is None else np.vstack([depot, pts, depot])
+        ax.plot(path[:, 0], path[:, 1], color="black", linewidth=1.1, zorder=2, label="tour")
+        ax.scatter(pts[:, 0], pts[:, 1], s=36, c=colors[order_arr], edgecolors="black",
+                   linewidths=0.9, zorder=3, label="chosen heads")
+    ax.autoscale_view()
+    ax.set_aspect("equal", adjustable="datalim")
+    unit = " (m)" if instance.is_uav else ""
+    ax.set_xlabel("longitude" if geo else f"x{unit}")
+    ax.set_ylabel("latitude" if geo else f"y{unit}")
+    if title:
+        ax.set_title(title, fontsize=10)
+    # "best" weighs every point and hull against each place: seconds on the largest files
+    ax.legend(fontsize=7, loc="best" if instance.n_nodes <= 2000 else "upper right", markerscale=1.2)
     return ax
 
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import gzip
 import json
 import os
 import subprocess
 import sys
 from pathlib import Path
 
+import matplotlib.image as mpimg
 import pytest
 
 from gtsp_bench.cli import main
@@ -104,6 +106,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     missing = tmp_path / "missing.json"
     folder = tmp_path / "folder.json"
     folder.mkdir()
+    berlin_tour = GTSPLIB / "tours" / "11berlin52.4040.tour.gz"
+    kroa = GTSPLIB / "20kroA100.gtsp.gz"
     return {
         "missing file": (["solve", str(missing), "-s", "greedy"], f"{missing}: no such file"),
         "malformed": (["solve", str(malformed), "-s", "greedy"], f"{malformed}: invalid JSON"),
@@ -138,6 +142,14 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
                                f"{folder}: cannot write"),
         "generate onto a folder": (["generate", "-k", "3", "-o", str(folder)],
                                    f"{folder}: cannot write"),
+        "tour of another instance": (["evaluate", str(kroa), "--solution", str(berlin_tour)],
+                                     f"{berlin_tour}: the tour lists 11 nodes, but a tour of 20kroA100"),
+        "tour not .tour": (["solve", str(k4), "-s", "greedy", "--tour", str(tmp_path / "t.txt")],
+                           "t.txt: a tour file's name ends in .tour (or .tour.gz)"),
+        "plot not .png": (["plot", str(k4), "-o", str(tmp_path / "k4.pdf")],
+                          "k4.pdf: plot writes PNG; name the output FILE.png"),
+        "plot infeasible": (["plot", str(k4), "--solution", str(infeasible), "-o", str(tmp_path / "p.png")],
+                            f"{infeasible}: infeasible solution: cluster 0 is visited 2 times"),
     }
 
 
@@ -146,7 +158,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     "solver", "option", "time limit", "infeasible", "impossible generator", "not a number",
     "brute too big", "output is a folder", "generate onto a folder", "huge index",
     "huge coordinate", "huge dimension", "negative seed (solve)", "negative seed (generate)",
-    "negative seed (train)", "empty .gtsp set",
+    "negative seed (train)", "empty .gtsp set", "tour of another instance", "tour not .tour",
+    "plot not .png", "plot infeasible",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""
@@ -161,6 +174,61 @@ def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     assert len(err.strip().splitlines()) == 1, err
     assert expected in err
     assert "Traceback" not in err
+
+
+def test_solve_tour_then_evaluate_and_plot_it(capsys, k4, tmp_path):
+    """solve --tour writes a tour file that evaluate re-prices at the solver's objective, and plot
+    draws it beside a JSON solution: a whole PNG, two panels wide, written atomically."""
+    sol, tour, png = tmp_path / "sol.json", tmp_path / "dp.tour", tmp_path / "k4.png"
+    code, out, _ = run(capsys, "solve", str(k4), "-s", "dp", "-w", "0.3", "--json", "--tour", str(tour))
+    assert code == 0
+    solved = json.loads(out)
+    assert "TYPE : TOUR" in tour.read_text() and "at omega = 0.3" in tour.read_text()
+    code, out, _ = run(capsys, "evaluate", str(k4), "--solution", str(tour), "-w", "0.3", "--json")
+    assert code == 0
+    evaluated = json.loads(out)
+    assert (evaluated["order"], evaluated["heads"]) == (solved["order"], solved["heads"])
+    assert evaluated["objective"] == solved["objective"]
+    assert run(capsys, "solve", str(k4), "-s", "greedy", "-w", "0.3", "-o", str(sol))[0] == 0
+    code, out, err = run(capsys, "plot", str(k4), "--solution", str(sol), "--solution", str(tour),
+                         "-w", "0.3", "-o", str(png))
+    assert code == 0 and out == "" and err == f"wrote {png} (2 solutions)\n"
+    assert png.read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
+    height, width, _ = mpimg.imread(png).shape
+    assert 400 <= height <= 700 and 2 * height - 100 <= width <= 2 * height + 100
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dp.tour", "k4.json", "k4.png", "sol.json"]
+
+
+def test_solve_tour_of_a_gtsplib_file(capsys, tmp_path):
+    """On a GTSPLIB file --tour writes the file's node ids (gzip-compressed for .tour.gz) with
+    GLKH's 'Length = ' comment, and evaluate re-prices the tour at the solver's length."""
+    berlin, tour = str(GTSPLIB / "11berlin52.gtsp.gz"), tmp_path / "b.tour.gz"
+    code, out, _ = run(capsys, "solve", berlin, "-s", "greedy", "--json", "--tour", str(tour))
+    assert code == 0
+    solved = json.loads(out)
+    assert f"COMMENT : Length = {solved['objective']:g}" in gzip.decompress(tour.read_bytes()).decode()
+    code, out, _ = run(capsys, "evaluate", berlin, "--solution", str(tour), "--json")
+    assert code == 0 and json.loads(out)["objective"] == solved["objective"]
+
+
+def test_plot_a_gtsplib_file_with_coordinates(capsys, tmp_path):
+    """A GTSPLIB file with its GLKH tour (no base station): one panel, a PNG of a sensible size."""
+    png = tmp_path / "berlin.png"
+    code, out, _ = run(capsys, "plot", str(GTSPLIB / "11berlin52.gtsp.gz"), "--solution",
+                       str(GTSPLIB / "tours" / "11berlin52.4040.tour.gz"), "-o", str(png))
+    assert code == 0 and out == ""
+    height, width, _ = mpimg.imread(png).shape
+    assert 400 <= height <= 700 and 400 <= width <= 700
+
+
+def test_plot_refuses_a_file_of_weights_alone(capsys, tmp_path):
+    """A GTSPLIB file without coordinates: exit 2, one stderr line naming it, no file written."""
+    path, png = GTSPLIB / "10gr48.gtsp.gz", tmp_path / "gr.png"
+    code, out, err = run(capsys, "plot", str(path), "-o", str(png))
+    assert code == 2 and out == ""
+    assert err == (f"gtsp-bench: error: {path}: no node coordinates to draw: the file gives EXPLICIT "
+                   "weights without a DISPLAY_DATA_SECTION\n")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_solver_refusing_the_instance_names_the_file(capsys, tmp_path):

@@ -10,14 +10,19 @@ import stat
 import numpy as np
 import pytest
 
+from gtsp_bench.data import gtsplib
 from gtsp_bench.data.io import (
     atomic_write_text,
     format_suffix,
     read_instance,
     read_solution,
+    read_solution_file,
     read_tour,
     write_instance,
+    write_tour,
 )
+from gtsp_bench.data.parse import parse_tour
+from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from tests.conftest import GTSPLIB
@@ -199,3 +204,76 @@ def test_read_tour(tmp_path):
     plain.write_text("TOUR_SECTION\n999\n-1\n")
     with pytest.raises(InputError, match=f"^{plain}: tour names node 999"):
         read_tour(plain, inst)
+
+
+@pytest.mark.parametrize("suffix", [".tour", ".tour.gz"])
+def test_uav_tour_file_round_trip(tmp_path, suffix):
+    """A UAV solution written as a tour file (plain or gzip) reads back as the same solution, at
+    the same energy; its ids are the heads' 1-based node numbers in cluster order."""
+    inst = generate_instance(5, 4, seed=3)
+    order, heads = [3, 0, 4, 1, 2], [1, 3, 0, 2, 1]
+    path = write_tour(inst, tmp_path / f"t{suffix}", order, heads, comments=["five clusters"])
+    assert read_solution_file(path, inst) == (order, heads)
+    text = gzip.decompress(path.read_bytes()).decode() if suffix.endswith(".gz") else path.read_text()
+    assert parse_tour(text) == [4 * c + heads[c] + 1 for c in order]
+    assert "COMMENT : five clusters" in text
+    again = read_solution_file(path, inst)
+    assert evaluate(inst, 0.4, *again).objective == evaluate(inst, 0.4, order, heads).objective
+
+
+@pytest.mark.parametrize("name", ["11berlin52", "20gr96", "10gr48", "10ftv47"])
+def test_gtsplib_gtsp_and_tour_round_trip(tmp_path, name):
+    """EUC_2D, GEO, a LOWER_DIAG_ROW matrix and an asymmetric file: the instance written as .gtsp
+    and GLKH's tour written against the copy read back at the best-known length; written against
+    the original file, the tour lists GLKH's own node ids."""
+    original = gtsplib.read(name)
+    order, heads = gtsplib.best_tour(name, original)
+    best = gtsplib.best_known()[name].value
+    copy = read_instance(write_instance(original, tmp_path / f"{name}.gtsp"))
+    path = write_tour(copy, tmp_path / f"{name}.tour", order, heads)
+    assert read_solution_file(path, copy) == (order, heads)
+    assert evaluate(copy, None, order, heads).objective == best
+    ours = write_tour(original, tmp_path / "original.tour", order, heads)
+    glkh = gzip.decompress(gtsplib.tour_path(name).read_bytes()).decode()
+    assert parse_tour(ours.read_text()) == parse_tour(glkh)
+
+
+def test_read_solution_file_chooses_by_suffix(tmp_path):
+    """.tour and .tour.gz read as tours; any other name as a solution JSON object."""
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
+    order, heads = read_tour(GTSPLIB / "tours" / "11berlin52.4040.tour.gz", inst)
+    sol = tmp_path / "sol.txt"
+    sol.write_text(f'{{"order": {order}, "heads": {heads}}}')
+    assert read_solution_file(sol, inst) == (order, heads)
+    assert read_solution_file(GTSPLIB / "tours" / "11berlin52.4040.tour.gz", inst) == (order, heads)
+
+
+def test_a_tour_of_another_instance_or_missing_a_node_is_refused(tmp_path):
+    """Each bad tour file is one InputError that starts with its path and says what is wrong."""
+    berlin = GTSPLIB / "tours" / "11berlin52.4040.tour.gz"
+    with pytest.raises(InputError, match=f"^{berlin}: the tour lists 11 nodes, but a tour of 20kroA100 "
+                                         "lists one node of each of its 20 clusters$"):
+        read_solution_file(berlin, read_instance(GTSPLIB / "20kroA100.gtsp.gz"))
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
+    ids = parse_tour(gzip.decompress(berlin.read_bytes()).decode())
+    short = tmp_path / "short.tour"
+    short.write_text("TOUR_SECTION\n" + "\n".join(map(str, ids[:-1])) + "\n-1\n")
+    with pytest.raises(InputError, match=f"^{short}: the tour lists 10 nodes, but a tour of 11berlin52"):
+        read_solution_file(short, inst)
+    twice = tmp_path / "twice.tour"  # node 22's cluster visited twice, another cluster never
+    twice.write_text("TOUR_SECTION\n" + "\n".join(map(str, [ids[0], *ids[:-1]])) + "\n-1\n")
+    with pytest.raises(InputError, match=f"^{twice}: infeasible solution: cluster .* is visited 2 times$"):
+        read_solution_file(twice, inst)
+    unknown = tmp_path / "unknown.tour"
+    unknown.write_text("TOUR_SECTION\n" + "\n".join(map(str, [*ids[:-1], 53])) + "\n-1\n")
+    with pytest.raises(InputError, match=rf"^{unknown}: tour names node 53, which is not in 11berlin52 "
+                                         r"\(its nodes are 1..52\)$"):
+        read_solution_file(unknown, inst)
+
+
+def test_write_tour_needs_a_tour_name(tmp_path):
+    """Only a .tour (or .tour.gz) name is read back as a tour, so no other is written."""
+    inst = generate_instance(3, 2, seed=0)
+    with pytest.raises(InputError, match=r"sol.json: a tour file's name ends in .tour \(or .tour.gz\)$"):
+        write_tour(inst, tmp_path / "sol.json", [0, 1, 2], [0, 0, 0])
+    assert list(tmp_path.iterdir()) == []

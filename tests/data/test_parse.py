@@ -15,10 +15,12 @@ from hypothesis import strategies as st
 from gtsp_bench.data.parse import (
     format_gtsp,
     format_json_instance,
+    format_tour,
     parse_gtsp,
     parse_json_instance,
     parse_solution,
     parse_tour,
+    tour_node_ids,
     tour_to_solution,
 )
 from gtsp_bench.energy import evaluate
@@ -341,13 +343,40 @@ def test_bad_tours(old, new, message):
         parse_tour(TOUR.replace(old, new))
 
 
-def test_tour_of_unknown_nodes_or_instances():
-    """A node the file does not have, or an instance not read from a GTSPLIB file, is refused."""
-    with pytest.raises(InputError, match="tour names node 7, which is not in small"):
+def test_tour_of_unknown_nodes_or_of_another_size():
+    """A node the instance does not have, or a tour of more or fewer nodes than it has clusters,
+    is refused with what was expected."""
+    with pytest.raises(InputError, match=r"tour names node 7, which is not in small \(its nodes are 1..4\)"):
         tour_to_solution(parse_gtsp(SMALL), [7, 1])
+    with pytest.raises(InputError, match="the tour lists 3 nodes, but a tour of small lists one node of "
+                                         "each of its 2 clusters"):
+        tour_to_solution(parse_gtsp(SMALL), [1, 2, 4])
+
+
+def test_uav_tour_node_ids_count_the_nodes_in_cluster_order():
+    """A UAV instance's node i of cluster k is id offsets[k] + i + 1 (the JSON's order, 1-based);
+    the depot has none."""
+    uav = parse_json_instance(_text())  # cluster 0: two nodes, cluster 1: one
+    assert tour_node_ids(uav).tolist() == [1, 2, 3]
+    assert tour_to_solution(uav, [3, 2]) == ([1, 0], [1, 0])
+
+
+def test_format_tour_writes_what_parse_tour_reads():
+    """format_tour lists the heads' file ids in visiting order, DIMENSION = K, and reads back as
+    the same solution; GTSPLIB ids are the file's, not the cluster-order numbers."""
+    inst = parse_gtsp(SMALL)  # cluster 0 = nodes 1, 3; cluster 1 = nodes 2, 4
+    text = format_tour(inst, [1, 0], [0, 1], comments=["Length = 10", "two\nlines"])
+    assert parse_tour(text) == [4, 1]
+    assert "DIMENSION : 2\n" in text and "COMMENT : two lines\n" in text
+    assert tour_to_solution(inst, parse_tour(text)) == ([1, 0], [0, 1])
     uav = parse_json_instance(_text())
-    with pytest.raises(InputError, match="was not read from a GTSPLIB file"):
-        tour_to_solution(uav, [1, 2])
+    assert parse_tour(format_tour(uav, [0, 1], [1, 0])) == [2, 3]
+
+
+def test_format_tour_refuses_an_infeasible_solution():
+    """A solution that repeats a cluster is not written."""
+    with pytest.raises(InputError, match="cluster 0 is visited 2 times"):
+        format_tour(parse_gtsp(SMALL), [0, 0], [0, 0])
 
 
 def test_nan_in_an_explicit_matrix_is_named_as_such():

@@ -8,7 +8,8 @@ import pandas as pd
 import pytest
 
 from gtsp_bench.data.io import read_instance
-from gtsp_bench.report.figures import experiment_figure, save_png, training_figure
+from gtsp_bench.generator import generate_instance
+from gtsp_bench.report.figures import experiment_figure, save_png, tour_figure, training_figure
 from tests.conftest import REPO
 
 matplotlib.use("Agg")
@@ -56,3 +57,16 @@ def test_an_unknown_experiment_is_refused():
     """Only the paper's experiments have a figure."""
     with pytest.raises(ValueError, match="training"):
         experiment_figure("training", _table("ratio-k"), {})
+
+
+def test_tour_figure_one_panel_per_solution():
+    """Two solutions side by side under the instance's name; none: the instance alone; four: a
+    second row, the unused panels hidden."""
+    inst = generate_instance(3, 4, seed=2)
+    tours = [("a", [0, 1, 2], [0, 0, 0]), ("b", [2, 1, 0], [1, 1, 1])]
+    fig = tour_figure(inst, tours)
+    assert [ax.get_title() for ax in _visible(fig)] == ["a", "b"]
+    assert fig.get_suptitle() == inst.name
+    assert [ax.get_title() for ax in _visible(tour_figure(inst, []))] == [inst.name]
+    fig = tour_figure(inst, tours * 2)
+    assert len(fig.axes) == 6 and len(_visible(fig)) == 4

@@ -11,9 +11,12 @@ import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
+from gtsp_bench.data.io import read_instance
+from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.report import plots
 from gtsp_bench.report.paper import PAPER_RUNTIME_S
+from tests.conftest import GTSPLIB
 
 matplotlib.use("Agg")
 
@@ -71,6 +74,62 @@ def test_plot_trajectory_draws_closed_tours_through_heads():
     heads = [inst.clusters[2][2], inst.clusters[0][0], inst.clusters[1][1]]  # heads[k]: cluster k's
     assert np.allclose(xy[1:4], heads) and len(xy) == 5
     assert ax.get_title() == "K = 3"
+
+
+def _line(ax, label: str) -> np.ndarray:
+    line = next(ln for ln in ax.get_lines() if ln.get_label() == label)
+    return np.column_stack([line.get_xdata(), line.get_ydata()])
+
+
+def test_plot_tour_flies_from_the_base_station_through_the_chosen_heads():
+    """A UAV tour: base station, the heads in visiting order, base station; every node drawn as a
+    candidate head, one shaded hull per cluster, the chosen heads marked on top."""
+    inst = generate_instance(3, 4, seed=2)
+    ax = Figure().subplots()
+    assert plots.plot_tour(inst, [2, 0, 1], [0, 1, 2], ax=ax, title="greedy") is ax
+    xy = _line(ax, "tour")
+    heads = [inst.clusters[2][2], inst.clusters[0][0], inst.clusters[1][1]]
+    assert np.allclose(xy, [inst.depot, *heads, inst.depot])
+    marks = {c.get_label(): c for c in ax.collections}
+    assert len(marks["candidate heads"].get_offsets()) == inst.n_nodes
+    assert np.allclose(marks["chosen heads"].get_offsets(), heads)
+    assert np.allclose(marks["base station"].get_offsets(), [inst.depot])
+    assert len(ax.collections[0].get_paths()) == 3  # the clusters' hulls
+    assert ax.get_title() == "greedy" and ax.get_xlabel() == "x (m)"
+
+
+def test_plot_tour_of_a_gtsplib_file_is_a_closed_cycle():
+    """No base station: the tour returns from the last head to the first; no solution, no tour."""
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
+    ax = Figure().subplots()
+    plots.plot_tour(inst, list(range(11)), [0] * 11, ax=ax)
+    xy = _line(ax, "tour")
+    assert len(xy) == 12 and np.allclose(xy[0], xy[-1]) and np.allclose(xy[0], inst.clusters[0][0])
+    assert "base station" not in [c.get_label() for c in ax.collections]
+    bare = plots.plot_tour(inst, ax=Figure().subplots())
+    assert bare.get_lines() == [] and "chosen heads" not in [c.get_label() for c in bare.collections]
+
+
+def test_plot_tour_draws_geo_coordinates_with_longitude_across():
+    """GEO files give (latitude, longitude): the x axis is the longitude."""
+    inst = read_instance(GTSPLIB / "20gr96.gtsp.gz")
+    ax = plots.plot_tour(inst, ax=Figure().subplots())
+    points = next(c for c in ax.collections if c.get_label() == "candidate heads").get_offsets()
+    assert np.allclose(points, inst.coords[:, ::-1]) and ax.get_xlabel() == "longitude"
+
+
+def test_plot_tour_refuses_a_file_of_weights_alone():
+    """A matrix-only GTSPLIB file has nothing to draw: an InputError that says why."""
+    inst = read_instance(GTSPLIB / "10gr48.gtsp.gz")
+    with pytest.raises(InputError, match=r"^no node coordinates to draw: the file gives EXPLICIT weights"):
+        plots.plot_tour(inst, ax=Figure().subplots())
+
+
+def test_convex_hull_corners():
+    """The hull of a square with an inner point and a repeated corner is its four corners."""
+    hull = plots._convex_hull(np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1], [2, 2]], float))
+    assert sorted(map(tuple, hull.tolist())) == [(0, 0), (0, 2), (2, 0), (2, 2)]
+    assert len(plots._convex_hull(np.array([[0, 0], [1, 1], [2, 2]], float))) < 3
 
 
 def test_plot_training_one_line_per_model():
