@@ -14,7 +14,7 @@ from gtsp_bench.cli import main
 from tests.conftest import GTSPLIB, REPO
 
 KEYS = ["instance", "solver", "omega", "order", "heads", "objective", "energy", "distance",
-        "status", "lower_bound", "runtime_s"]
+        "status", "lower_bound", "runtime_s", "trajectory"]
 
 
 @pytest.fixture
