@@ -14,7 +14,7 @@ from gtsp_bench.instance import Instance
 from gtsp_bench.params import EnergyParams
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.registry import get_solver, register_solver, run_solver, solver_names
-from gtsp_bench.solver import BatchSolver, Result, Solution, Solver
+from gtsp_bench.solver import BatchSolver, Progress, Result, Solution, Solver, TrajectoryPoint
 
 __version__ = "0.1.0"
 
@@ -27,10 +27,12 @@ __all__ = [
     "InputError",
     "Instance",
     "Problem",
+    "Progress",
     "Result",
     "Solution",
     "Solver",
     "SolverError",
+    "TrajectoryPoint",
     "evaluate",
     "evaluate_batch",
     "generate_batch",

@@ -425,6 +425,8 @@ def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict
     finite ``objective`` and an ``order`` and ``heads`` of one entry per cluster; ``failed`` and
     ``refused`` need a null (or NaN, as older logs wrote) objective and no tour; ``time_limit``
     is either (a solve stopped by its limit, or one killed at the hard limit without an answer).
+    An optional ``trajectory`` (``[[time_s, objective, lower_bound], ...]``) must have times that
+    never fall, objectives that never rise and end at ``objective``, and bounds that never fall.
     """
     if not isinstance(record, dict):
         raise InputError("not a JSON object")
@@ -468,7 +470,35 @@ def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict
             raise InputError(f"{name} {value!r} is not a number")
     if "note" in record and not isinstance(record["note"], str):
         raise InputError("note is not a string")
+    if "trajectory" in record:
+        _check_trajectory(record["trajectory"], None if no_answer else objective)
     return record
+
+
+def _check_trajectory(points: object, objective: object) -> None:
+    """The optional ``trajectory`` of a task record: ``[[time_s, objective, lower_bound], ...]``
+    with times that never fall, objectives that never rise, bounds (a number or null) that never
+    fall once given, and the last objective equal to the record's; none without an answer."""
+    if not isinstance(points, list):
+        raise InputError("trajectory is not a list")
+    if objective is None:
+        if points:
+            raise InputError("a solve without an objective has a trajectory")
+        return
+    last_t, last_obj, last_lb = 0.0, math.inf, -math.inf
+    for i, point in enumerate(points):
+        if not isinstance(point, list) or len(point) != 3:
+            raise InputError(f"trajectory point {i} is not [time_s, objective, lower_bound]")
+        t, obj, lb = point
+        if not is_number(t) or not math.isfinite(t) or t < last_t:
+            raise InputError(f"trajectory point {i}: time {t!r} is not a number >= the one before")
+        if not is_number(obj) or not math.isfinite(obj) or obj > last_obj:
+            raise InputError(f"trajectory point {i}: objective {obj!r} is not a number <= the one before")
+        if lb is not None and (not is_number(lb) or not math.isfinite(lb) or lb < last_lb):
+            raise InputError(f"trajectory point {i}: lower bound {lb!r} is not a number >= the one before")
+        last_t, last_obj, last_lb = t, obj, last_lb if lb is None else lb
+    if points and last_obj != objective:
+        raise InputError(f"the trajectory ends at {last_obj!r}, not at the objective {objective!r}")
 
 
 # ---------------------------------------------------------------------- argparse types

@@ -10,6 +10,10 @@ Asymmetric costs (a GTSPLIB ``AGTSP`` file, ``Instance.symmetric`` false) are pa
 model, but a solver takes them only when its class says so with ``asymmetric = True``
 (:func:`handles_asymmetric`; absent means ``False``): :func:`run_solver` refuses an asymmetric
 instance for any other solver with one :class:`InputError` line, before it runs.
+
+A solver whose ``solve`` declares ``progress`` reports each improvement to a :class:`Recorder`
+(the result's ``trajectory``; ``on_progress`` sees each point as it comes), and one that declares
+``initial`` takes a warm start, checked by the evaluator first (:func:`check_initial`).
 """
 
 from __future__ import annotations
@@ -19,13 +23,14 @@ import inspect
 import math
 import statistics
 import sys
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 from typing import Any
 
-from gtsp_bench.checks import check_omega, check_seed, check_time_limit
+from gtsp_bench.checks import check_omega, check_seed, check_time_limit, is_number
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
 from gtsp_bench.instance import Instance
@@ -35,9 +40,14 @@ from gtsp_bench.solver import (
     Result,
     Solution,
     Solver,
+    TrajectoryPoint,
     handles_asymmetric,
     solves_batches,
+    takes_keyword,
 )
+
+#: A warm start: a :class:`Solution`, a :class:`Result` or ``(order, heads)``.
+Initial = Solution | Result | tuple[Sequence[int], Sequence[int]]
 
 
 # ---------------------------------------------------------------------- registry
@@ -251,6 +261,120 @@ def check_capability(solver: object, name: str, instance: Instance) -> None:
         raise InputError(f"{name} handles symmetric costs only (this instance is asymmetric)")
 
 
+def check_initial(instance: Instance, omega: float | None, initial: Initial) -> Solution:
+    """A warm start checked and priced by the evaluator, as a :class:`Solution` with status
+    ``feasible`` (its ``lower_bound`` kept as claimed, when not above its objective).
+
+    Raises
+    ------
+    InputError
+        One line: not a Solution, a Result nor ``(order, heads)``, an infeasible solution, or a claimed
+        lower bound that is not a number or lies above the objective.
+    """
+    bound: object = None
+    if isinstance(initial, (Solution, Result)):
+        order, heads, bound = initial.order, initial.heads, initial.lower_bound
+    elif isinstance(initial, (tuple, list)) and len(initial) == 2:
+        order, heads = initial
+    else:
+        raise InputError("an initial solution is a Solution, a Result or (order, heads), "
+                         f"not {type(initial).__name__}")
+    w = check_omega(omega) if instance.is_uav else None
+    try:
+        ev = evaluate(instance, w, order, heads)
+    except InfeasibleSolutionError as e:
+        raise InputError(f"infeasible initial solution: {e}") from None
+    if bound is not None:
+        tol = REL_TOL * max(1.0, abs(ev.objective))
+        if not is_number(bound) or not math.isfinite(bound):  # type: ignore[arg-type]
+            raise InputError(f"the initial solution's lower bound {bound!r} is not a finite number")
+        if bound > ev.objective + tol:
+            raise InputError(f"the initial solution's lower bound {bound!r} is above its "
+                             f"objective {ev.objective!r}")
+    return Solution(tuple(int(c) for c in order), tuple(int(h) for h in heads), ev.objective,
+                    "feasible", None if bound is None else float(bound))
+
+
+def check_warm_start(solver: object, name: str) -> None:
+    """:class:`InputError` (one line) when the solver cannot start from an initial solution
+    (its ``solve`` does not declare ``initial``)."""
+    if not takes_keyword(solver, "initial"):
+        raise InputError(f"solver {name!r} cannot start from an initial solution")
+
+
+class Recorder:
+    """The :class:`~gtsp_bench.solver.Progress` the harness hands a solver: it keeps each
+    improvement as a :class:`TrajectoryPoint` (objectives never rise, bounds never fall).
+
+    Parameters
+    ----------
+    start
+        The :func:`time.perf_counter` reading the points' times count from.
+    listener
+        Called with each new point as it is recorded (``gtsp-bench solve --progress``).
+    """
+
+    def __init__(self, start: float, listener: Callable[[TrajectoryPoint], None] | None = None) -> None:
+        self.start = start
+        self.listener = listener
+        self.points: list[TrajectoryPoint] = []
+        self.best = math.inf
+        self.bound = -math.inf
+        self.error: str | None = None  #: the first bad report, raised after the solve
+        self._lock = threading.Lock()
+
+    def __call__(self, objective: float | None = None, lower_bound: float | None = None) -> None:
+        """Record ``objective`` and/or ``lower_bound`` when either improves."""
+        now = time.perf_counter() - self.start
+        with self._lock:
+            better = False
+            for kind, value in (("objective", objective), ("lower bound", lower_bound)):
+                if value is None:
+                    continue
+                try:
+                    x = float(value)
+                except (TypeError, ValueError):
+                    x = math.nan
+                if not math.isfinite(x):
+                    self.error = self.error or f"reported {kind} {value!r}, not a finite number"
+                elif kind == "objective" and x < self.best:
+                    self.best, better = x, True
+                elif kind == "lower bound" and x > self.bound:
+                    self.bound, better = x, True
+            if better and math.isfinite(self.best):
+                point = TrajectoryPoint(now, self.best, self.bound if math.isfinite(self.bound) else None)
+                self.points.append(point)
+                if self.listener is not None:
+                    self.listener(point)
+
+    def finish(self, runtime: float, objective: float, lower_bound: float | None, tol: float
+               ) -> tuple[TrajectoryPoint, ...]:
+        """The trajectory ending at the answer (``objective``, ``lower_bound``) at ``runtime``.
+
+        A reported objective within ``tol`` below the answer (rounding) counts as the answer; the
+        answer is appended when the last point is not it (a solver that reports nothing gets
+        one point). Raises :class:`SolverError` for a bad report, an objective reported below the
+        answer by more than ``tol`` or a bound above it.
+        """
+        with self._lock:
+            if self.error is not None:
+                raise SolverError(self.error)
+            if self.best < objective - tol:
+                raise SolverError(f"reported objective {self.best!r} below its answer's {objective!r}")
+            if self.bound > objective + tol:
+                raise SolverError(f"reported lower bound {self.bound!r} above its answer's {objective!r}")
+            points = [replace(p, objective=max(p.objective, objective)) for p in self.points]
+            bound = max((b for b in (lower_bound, self.bound) if b is not None and math.isfinite(b)),
+                        default=None)
+            if not points or (points[-1].objective, points[-1].lower_bound) != (objective, bound):
+                point = TrajectoryPoint(max(runtime, points[-1].time_s if points else 0.0), objective,
+                                        bound)
+                points.append(point)
+                if self.listener is not None:
+                    self.listener(point)
+            return tuple(points)
+
+
 def run_solver(
     solver: Solver | str,
     instance: Instance,
@@ -259,6 +383,8 @@ def run_solver(
     time_limit: float | None = None,
     seed: int = 0,
     name: str | None = None,
+    initial: Initial | None = None,
+    on_progress: Callable[[TrajectoryPoint], None] | None = None,
 ) -> Result:
     """Solve, time, check and re-price.
 
@@ -276,15 +402,22 @@ def run_solver(
         Random seed.
     name
         Name recorded in the result (default: the registered name or the class name).
+    initial
+        A warm start, a :class:`Solution`, a :class:`Result` or ``(order, heads)``, checked by
+        :func:`check_initial`; only for a solver whose ``solve`` declares ``initial``.
+    on_progress
+        Called with each point of the trajectory as it is recorded (the last one: the answer).
 
     Raises
     ------
     InputError
-        Bad omega, time limit or seed, an unknown solver name, or an asymmetric instance for a
-        solver that handles symmetric costs only (:func:`check_capability`).
+        Bad omega, time limit or seed, an unknown solver name, an asymmetric instance for a
+        solver that handles symmetric costs only (:func:`check_capability`), or a warm start
+        that is infeasible or given to a solver that takes none.
     SolverError
         The solver failed, or returned an infeasible solution, an unknown status, a claimed
-        objective the evaluator does not confirm, or a lower bound above the objective.
+        objective the evaluator does not confirm, or a lower bound above the objective; or it
+        reported a trajectory its answer contradicts (:meth:`Recorder.finish`).
     """
     if isinstance(solver, str):
         name = name or solver
@@ -294,22 +427,32 @@ def run_solver(
     time_limit = check_time_limit(time_limit)
     check_seed(seed)
     check_capability(solver, name, instance)
+    extra: dict[str, Any] = {}
+    if initial is not None:
+        check_warm_start(solver, name)
+        extra["initial"] = check_initial(instance, w, initial)
     start = time.perf_counter()
-    sol = solver.solve(instance, w, time_limit=time_limit, seed=seed)
-    return checked_result(sol, instance, w, name, time.perf_counter() - start)
+    recorder = Recorder(start, on_progress)
+    if takes_keyword(solver, "progress"):
+        extra["progress"] = recorder
+    sol = solver.solve(instance, w, time_limit=time_limit, seed=seed, **extra)
+    return checked_result(sol, instance, w, name, time.perf_counter() - start, recorder)
 
 
-def checked_result(sol: object, instance: Instance, omega: float | None, name: str,
-                   runtime: float) -> Result:
-    """Check a solver's answer on ``instance`` and re-price it with the evaluator.
+def checked_result(sol: object, instance: Instance, omega: float | None, name: str, runtime: float,
+                   recorder: Recorder | None = None) -> Result:
+    """Check a solver's answer on ``instance`` and re-price it with the evaluator; its trajectory
+    is what ``recorder`` heard, ending at the answer (one point without a recorder).
 
     Raises
     ------
     SolverError
         Not a :class:`Solution`, an unknown or ``failed`` status, an infeasible tour, a claimed
-        objective the evaluator does not confirm, or a lower bound above the objective.
+        objective the evaluator does not confirm, a lower bound above the objective, or a
+        trajectory the answer contradicts.
     """
     w = omega
+    recorder = recorder or Recorder(0.0, None)
     if not isinstance(sol, Solution):
         raise SolverError(f"solver {name!r} returned {type(sol).__name__}, not a Solution")
     if sol.status not in STATUSES:
@@ -331,6 +474,11 @@ def checked_result(sol: object, instance: Instance, omega: float | None, name: s
             f"solver {name!r} claims lower bound {sol.lower_bound!r} above its objective "
             f"{ev.objective!r} on {instance.name}"
         )
+    lower = None if sol.lower_bound is None else float(sol.lower_bound)
+    try:
+        trajectory = recorder.finish(runtime, ev.objective, lower, tol)
+    except SolverError as e:
+        raise SolverError(f"solver {name!r} {e} on {instance.name}") from None
     return Result(
         instance=instance.name,
         solver=name,
@@ -341,9 +489,10 @@ def checked_result(sol: object, instance: Instance, omega: float | None, name: s
         energy=ev.energy,
         distance=ev.distance,
         status=sol.status,
-        lower_bound=None if sol.lower_bound is None else float(sol.lower_bound),
+        lower_bound=lower,
         runtime_s=runtime,
         stats=dict(sol.stats),
+        trajectory=trajectory,
     )
 
 

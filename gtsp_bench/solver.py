@@ -14,6 +14,18 @@ A solver is any class with a ``solve`` method (the :class:`Solver` protocol) ret
 ``solve_batch(instances, omegas, *, seed=0)``
     many instances in one call (learned policies decode a batch as one tensor program): the
     :class:`BatchSolver` protocol, tested by :func:`solves_batches`.
+
+Two optional keywords of ``solve`` are declared the same way, by naming them in its signature
+(:func:`takes_keyword`); the harness passes them only to a solver that does:
+
+``progress``
+    a :class:`Progress` callable the solver calls with each better objective it finds (and, for
+    an exact solver, each better lower bound); the harness turns the calls into the result's
+    :attr:`Result.trajectory`. A solver that does not declare it reports its one answer.
+``initial``
+    a warm start: a :class:`Solution` already checked and priced by the evaluator (its
+    ``lower_bound`` is whatever the caller claimed, unchecked). A solver without it refuses a
+    warm start with one :class:`~gtsp_bench.errors.InputError` line.
 """
 
 from __future__ import annotations
@@ -60,6 +72,70 @@ class Solution:
     status: str = "feasible"
     lower_bound: float | None = None
     stats: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class TrajectoryPoint:
+    """One point of a solve's trajectory: the best objective and bound known at a time.
+
+    Attributes
+    ----------
+    time_s
+        Seconds since the harness started the solve.
+    objective
+        The best objective found by then (never increases along a trajectory).
+    lower_bound
+        The best proven lower bound by then, if the solver has one (never decreases).
+    """
+
+    time_s: float
+    objective: float
+    lower_bound: float | None = None
+
+    @property
+    def gap(self) -> float | None:
+        """``(objective - lower_bound) / |objective|``, or ``None`` without a bound."""
+        if self.lower_bound is None:
+            return None
+        return max(0.0, self.objective - self.lower_bound) / max(abs(self.objective), 1e-300)
+
+    def to_dict(self) -> dict[str, float | None]:
+        """The JSON object of one point in ``gtsp-bench solve --json``."""
+        return {"time_s": self.time_s, "objective": self.objective, "lower_bound": self.lower_bound}
+
+
+class Progress(Protocol):
+    """What a solver that declares ``progress`` is given: call it with each better objective
+    (the exact cost of a tour it holds) and, for an exact solver, each better lower bound.
+
+    Either may be left out (``None``); calls that improve neither are ignored, so a solver may
+    call it freely. It is cheap, thread-safe and never raises: what a solver reports wrongly
+    (a non-number, an objective below its final answer) surfaces as a
+    :class:`~gtsp_bench.errors.SolverError` after the solve.
+    """
+
+    def __call__(self, objective: float | None = None, lower_bound: float | None = None) -> None:
+        """Report an objective and/or a lower bound."""
+        ...
+
+
+def no_progress(objective: float | None = None, lower_bound: float | None = None) -> None:
+    """A :class:`Progress` that ignores everything (a solver's default)."""
+
+
+def takes_keyword(solver: object, name: str) -> bool:
+    """Whether a solver's (object's or class's) ``solve`` declares the keyword ``name``
+    (``"progress"``, ``"initial"``); a bare ``**kwargs`` does not count."""
+    solve = getattr(solver, "solve", None)
+    if not callable(solve):
+        return False
+    try:
+        params = inspect.signature(solve).parameters
+    except (TypeError, ValueError):
+        return False
+    param = params.get(name)
+    return param is not None and param.kind in (inspect.Parameter.KEYWORD_ONLY,
+                                                inspect.Parameter.POSITIONAL_OR_KEYWORD)
 
 
 @runtime_checkable
@@ -112,6 +188,8 @@ class Result:
     lower_bound: float | None
     runtime_s: float
     stats: Mapping[str, Any] = field(default_factory=dict)
+    #: Each improvement, in time order; the last point is the answer (empty: not solved here).
+    trajectory: tuple[TrajectoryPoint, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``gtsp-bench solve --json``."""
@@ -130,6 +208,7 @@ class Result:
             "status": self.status,
             "lower_bound": self.lower_bound,
             "runtime_s": self.runtime_s,
+            "trajectory": [p.to_dict() for p in self.trajectory],
         }
 
     def summary(self) -> str:
@@ -172,6 +251,6 @@ def handles_asymmetric(solver: object) -> bool:
 
 
 __all__ = [
-    "REL_TOL", "STATUSES", "BatchSolver", "Result", "Solution", "Solver", "handles_asymmetric",
-    "solves_batches",
+    "REL_TOL", "STATUSES", "BatchSolver", "Progress", "Result", "Solution", "Solver",
+    "TrajectoryPoint", "handles_asymmetric", "no_progress", "solves_batches", "takes_keyword",
 ]

@@ -107,9 +107,9 @@ def test_aco_ls_keeps_a_share_of_its_time_limit_for_the_local_search(monkeypatch
 
     seen = {}
 
-    def record(self, problem, *, deadline, seed):
+    def record(self, problem, *, deadline, seed, **rest):
         seen[type(self).__name__] = deadline - time.perf_counter()
-        return real(self, problem, deadline=deadline, seed=seed)
+        return real(self, problem, deadline=deadline, seed=seed, **rest)
 
     real = aco.Aco.search
     monkeypatch.setattr(aco.Aco, "search", record)
@@ -118,3 +118,14 @@ def test_aco_ls_keeps_a_share_of_its_time_limit_for_the_local_search(monkeypatch
     run_solver(get_solver("aco+ls", iterations=1), inst, 0.5, time_limit=100.0)
     assert 99.0 < seen["Aco"] <= 100.0
     assert 100.0 * (1 - aco.LS_SHARE) - 1.0 < seen["AcoLS"] <= 100.0 * (1 - aco.LS_SHARE)
+
+
+@pytest.mark.parametrize("name", ["aco", "aco+ls"])
+def test_aco_reports_each_better_tour(name):
+    """aco reports its ants' best tour as it improves (aco+ls then the local search's): the
+    objectives never rise and end at the answer."""
+    inst = generate_instance(15, 8, seed=3)
+    r = run_solver(get_solver(name, iterations=30), inst, 0.5, seed=2)
+    objectives = [p.objective for p in r.trajectory]
+    assert len(objectives) >= 2 and objectives == sorted(objectives, reverse=True)
+    assert objectives[-1] == r.objective and all(p.lower_bound is None for p in r.trajectory)

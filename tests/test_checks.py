@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -215,3 +216,27 @@ def test_parse_names_strips_dedupes_and_checks():
     assert parse_names("", "solver") == ()
     with pytest.raises(InputError, match=r"^unknown solver 'x' \(valid: a, b\)$"):
         parse_names("a,x", "solver", ["a", "b"])
+
+
+def test_check_log_record_checks_the_trajectory():
+    """An optional trajectory must have times that never fall, objectives that never rise and
+    end at the record's objective, and bounds that never fall; a record without an answer has
+    an empty one at most."""
+    rec = {"key": "i#ab|milp|w=0.3|seed=0|tl=10", "solver": "milp", "omega": 0.3, "seed": 0,
+           "status": "optimal", "objective": 12.5, "order": [2, 0, 1], "heads": [0, 1, 0],
+           "lower_bound": 12.5, "trajectory": [[0.1, 14.0, None], [0.2, 14.0, 9.0], [0.3, 12.5, 12.5]]}
+    assert check_log_record(rec) is rec
+    for trajectory, message in [
+        ([[0.1, 12.0, None], [0.2, 12.5, None]], "objective 12.5 is not a number <= the one before"),
+        ([[0.1, 13.0, 9.0], [0.2, 12.5, 8.0]], "lower bound 8.0 is not a number >= the one before"),
+        ([[0.2, 13.0, None], [0.1, 12.5, None]], "time 0.1 is not a number >= the one before"),
+        ([[0.1, 13.0, None]], "the trajectory ends at 13.0, not at the objective 12.5"),
+        ([[0.1, 12.5]], "trajectory point 0 is not"),
+        ({"t": 1}, "trajectory is not a list"),
+    ]:
+        with pytest.raises(InputError, match=re.escape(message)):
+            check_log_record({**rec, "trajectory": trajectory})
+    failed = {"key": rec["key"], "solver": "milp", "omega": 0.3, "status": "failed", "objective": None}
+    assert check_log_record({**failed, "trajectory": []})
+    with pytest.raises(InputError, match="a solve without an objective has a trajectory"):
+        check_log_record({**failed, "trajectory": [[0.1, 12.5, None]]})

@@ -56,3 +56,13 @@ def test_without_gurobipy_the_error_is_clear(monkeypatch, tmp_path, capsys):
     write_instance(generate_instance(3, 3, seed=0), path)
     assert main(["solve", str(path), "--solver", "gurobi"]) == 2
     assert "needs gurobipy" in capsys.readouterr().err
+
+
+def test_gurobi_reports_incumbents_and_bounds():
+    """gurobi reports like milp (the shared search): objectives never rise, bounds never fall."""
+    pytest.importorskip("gurobipy")
+    r = run_solver("gurobi", generate_instance(8, 4, seed=3), 0.5, time_limit=60.0)
+    objectives = [p.objective for p in r.trajectory]
+    bounds = [p.lower_bound for p in r.trajectory if p.lower_bound is not None]
+    assert objectives == sorted(objectives, reverse=True) and objectives[-1] == r.objective
+    assert bounds and bounds == sorted(bounds)

@@ -225,3 +225,27 @@ def test_cli_solve_json(tmp_path, capsys):
     assert main(["solve", str(path), "--solver", "dp", "--omega", "0.4", "--json"]) == 0
     assert data["objective"] == pytest.approx(json.loads(capsys.readouterr().out)["objective"],
                                               rel=1e-9)
+
+
+def test_atsp_tour_is_the_inverse_of_tour_from_atsp():
+    """The Noon-Bean tour of a GTSP tour walks each cluster's cycle from its head and maps back
+    to the same tour, contiguous."""
+    from gtsp_bench.solvers.peers.lkh import atsp_tour
+
+    problem = price(generate_instance(5, 4, seed=3), 0.5)
+    tour = np.array([problem.n_nodes - 1, 6, 1, 13, 19, 9])  # the depot, then one head per cluster
+    nodes = atsp_tour(tour, problem.clusters, problem.cluster_of)
+    assert sorted(nodes.tolist()) == list(range(problem.n_nodes))
+    back, contiguous = tour_from_atsp(nodes, problem.cluster_of)
+    assert contiguous and back.tolist() == tour.tolist()
+
+
+def test_lkh_starts_from_the_warm_start():
+    """LKH reads the warm start as its initial tour: with one trial, the answer is no worse
+    than the warm start (without it, one trial from LKH's own first tour is worse here)."""
+    inst = gtsplib.read("40d198")
+    first = run_solver("lns", inst, None, time_limit=1.0, seed=1)
+    one = get_solver("lkh", max_trials=1)
+    warm = run_solver(one, inst, None, seed=1, initial=first)
+    assert warm.objective <= first.objective and warm.stats["warm_start"] is True
+    assert run_solver(one, inst, None, seed=1).objective > first.objective

@@ -383,3 +383,29 @@ def test_race_keeps_the_cheapest_start():
             search.race([earlier], None)  # the same random numbers as in the race
         alone.append(search.race([kind], None)[1])
     assert cost == min(alone)
+
+
+def test_lns_reports_each_better_tour():
+    """On 40d198 lns reports the first tour and later better ones: objectives never rise, and
+    the trajectory ends at the answer."""
+    r = run_solver("lns", read_instance(GTSPLIB / "40d198.gtsp.gz"), None, time_limit=1.0, seed=1)
+    objectives = [p.objective for p in r.trajectory]
+    assert len(objectives) >= 2 and objectives == sorted(objectives, reverse=True)
+    assert objectives[-1] == r.objective
+
+
+def test_lns_warm_start():
+    """From a warm start the search starts at that tour (its first report is no worse) and ends
+    no worse; a warm start whose claimed bound meets its objective comes back at once,
+    unchanged."""
+    from gtsp_bench.solver import Solution
+
+    inst = generate_instance(12, 6, seed=5)
+    first = run_solver("greedy", inst, 0.4)
+    r = run_solver("lns", inst, 0.4, time_limit=0.5, seed=2, initial=first)
+    assert r.trajectory[0].objective <= first.objective and r.objective <= first.objective
+    assert r.stats["warm_start"] is True
+    proven = Solution(r.order, r.heads, r.objective, lower_bound=r.objective)
+    again = run_solver("lns", inst, 0.4, time_limit=30.0, seed=3, initial=proven)
+    assert (again.order, again.heads, again.objective) == (r.order, r.heads, r.objective)
+    assert again.runtime_s < 1.0 and again.stats["warm_start"] == "at its lower bound"

@@ -128,3 +128,22 @@ def test_anchor_node():
     assert anchor_node(problem) == min(problem.clusters, key=len)[0]
     inst, omega, _ = tiny_case(1)
     assert anchor_node(price(inst, omega)) == price(inst, omega).depot
+
+
+def test_greedy_ls_warm_start_and_reports():
+    """greedy+ls improves a warm start instead of the greedy tour, reporting each better tour
+    (objectives never rise, the first is the warm start's); a local optimum comes back as it
+    is."""
+    from gtsp_bench.registry import get_solver
+
+    inst = generate_instance(15, 8, seed=8)
+    problem = price(inst, 0.5)
+    rng = np.random.default_rng(4)
+    order, heads = problem.to_solution(_random_tour(problem, rng))
+    r = run_solver(get_solver("greedy+ls"), inst, 0.5, initial=(order, heads))
+    objectives = [p.objective for p in r.trajectory]
+    assert objectives == sorted(objectives, reverse=True) and objectives[-1] == r.objective
+    assert len(objectives) >= 2 and r.stats["warm_start"] is True
+    assert r.trajectory[0].objective == pytest.approx(problem.tour_cost(problem.to_tour(order, heads)))
+    again = run_solver("greedy+ls", inst, 0.5, initial=r)
+    assert (again.order, again.heads) == (r.order, r.heads)

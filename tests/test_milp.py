@@ -174,3 +174,30 @@ def test_importing_milp_does_not_import_highspy():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                          check=True).stdout
     assert out.split() == ["False", "False"]
+
+
+def test_milp_reports_incumbents_and_bounds():
+    """milp reports its incumbents and bounds: objectives never rise, bounds never fall and end
+    at the proof (the last point's bound is the answer's)."""
+    r = run_solver("milp", generate_instance(14, 8, seed=6), 0.5, time_limit=120.0, seed=1)
+    assert r.status == "optimal"
+    objectives = [p.objective for p in r.trajectory]
+    bounds = [p.lower_bound for p in r.trajectory if p.lower_bound is not None]
+    assert objectives == sorted(objectives, reverse=True) and objectives[-1] == r.objective
+    assert len(bounds) >= 3 and bounds == sorted(bounds)
+    assert bounds[-1] == pytest.approx(r.objective, rel=1e-9)
+
+
+def test_milp_warm_start_is_its_first_incumbent():
+    """A warm start is milp's first incumbent (no LNS tour first): its first report is the warm
+    start's objective, and an optimal one is proven with the same tour cost."""
+    inst = generate_instance(12, 6, seed=2)
+    solved = run_solver("milp", inst, 0.3, time_limit=120.0, seed=0)
+    greedy = run_solver("greedy", inst, 0.3)
+    r = run_solver("milp", inst, 0.3, time_limit=120.0, initial=greedy)
+    assert r.trajectory[0].objective == pytest.approx(greedy.objective, rel=1e-12)
+    assert r.stats["warm_start"] is True
+    assert r.status == "optimal" and r.objective == pytest.approx(solved.objective, rel=1e-9)
+    again = run_solver("milp", inst, 0.3, time_limit=120.0, initial=solved)
+    assert again.status == "optimal" and again.objective == pytest.approx(solved.objective, rel=1e-12)
+    assert again.trajectory[0].objective == pytest.approx(solved.objective, rel=1e-12)

@@ -231,3 +231,27 @@ def test_a_lost_worker_is_an_error_then_replaced():
     again = run_solver(get_solver("ortools", **FAST), inst, 0.5, time_limit=30)
     assert peer._WORKER is not worker and peer._WORKER.proc.poll() is None
     assert (again.order, again.heads) == (first.order, first.heads)
+
+
+def test_ortools_reports_solutions_and_takes_a_warm_start():
+    """OR-Tools' solution callback reports each better tour (priced exactly, in order), and a
+    warm start read from its route is its first solution: the first report is no worse."""
+    inst = generate_instance(15, 8, seed=4)
+    r = run_solver(get_solver("ortools", **FAST), inst, 0.5, time_limit=30.0, seed=0)
+    objectives = [p.objective for p in r.trajectory]
+    assert len(objectives) >= 2 and objectives == sorted(objectives, reverse=True)
+    assert objectives[-1] == r.objective
+    first = run_solver("greedy", inst, 0.5)
+    warm = run_solver(get_solver("ortools", **FAST), inst, 0.5, time_limit=30.0, initial=first)
+    assert warm.trajectory[0].objective <= first.objective + 1e-9
+    assert warm.objective <= first.objective + 1e-9 and warm.stats["warm_start"] is True
+
+
+def test_ortools_warm_start_without_a_depot():
+    """On a GTSPLIB file (no depot) the warm start goes to the run from its node of the
+    smallest cluster: the answer is no worse than the warm start."""
+    inst = gtsplib.read("11berlin52")
+    first = run_solver("greedy", inst, None)
+    warm = run_solver(get_solver("ortools", solution_limit=5), inst, None, time_limit=30.0,
+                      initial=first)
+    assert warm.objective <= first.objective

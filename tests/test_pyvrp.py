@@ -130,3 +130,13 @@ def test_costs_that_would_overflow_the_integer_sums_are_refused(monkeypatch):
         far_problem = price(far, None)
     with pytest.raises(InputError, match="not finite numbers"):
         folded_costs(far_problem, solver="pyvrp", library="PyVRP")
+
+
+def test_pyvrp_reports_each_better_tour():
+    """PyVRP's on_best callback reports each better tour, priced exactly: the objectives never
+    rise and end at the answer."""
+    inst = generate_instance(15, 8, seed=4)
+    r = run_solver(get_solver("pyvrp", **FAST), inst, 0.5, time_limit=30.0, seed=0)
+    objectives = [p.objective for p in r.trajectory]
+    assert len(objectives) >= 2 and objectives == sorted(objectives, reverse=True)
+    assert objectives[-1] == r.objective

@@ -106,7 +106,7 @@ def test_result_json_shape(tiny):
     """to_dict has exactly the CLI's keys."""
     d = run_solver(Fixed(), tiny, 0.5).to_dict()
     assert list(d) == ["instance", "solver", "omega", "order", "heads", "objective", "energy",
-                       "distance", "status", "lower_bound", "runtime_s"]
+                       "distance", "status", "lower_bound", "runtime_s", "trajectory"]
     assert list(d["energy"]) == ["total", "ground", "flight", "hover"]
 
 
@@ -326,3 +326,150 @@ def test_peers_find_brutes_optimum_on_asymmetric_instances(name, options, seed):
     inst, best = tiny_asymmetric_case(seed)
     r = run_solver(get_solver(name, **options), inst, None, time_limit=10.0, seed=seed)
     assert r.objective == pytest.approx(best, rel=1e-12)
+
+
+# ---------------------------------------------------------------------- trajectories
+class Reporting(Fixed):
+    """A test solver that reports a scripted list of (objective, lower bound) calls."""
+
+    def __init__(self, calls, **kwargs):
+        super().__init__(**kwargs)
+        self.calls = calls
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0, progress=None):
+        for objective, bound in self.calls:
+            progress(objective, bound)
+        return super().solve(instance, omega, time_limit=time_limit, seed=seed)
+
+
+class WarmStarted(Fixed):
+    """A test solver that returns its warm start as it got it."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0, initial=None):
+        self.got = initial
+        return initial
+
+
+def test_a_solver_that_reports_nothing_gets_its_answer_as_one_point(tiny):
+    """A solver without ``progress`` in its signature is not given one; its trajectory is its
+    answer, at the solve's runtime."""
+    r = run_solver(Fixed(lower_bound=1.0), tiny, 0.5)
+    assert len(r.trajectory) == 1
+    point = r.trajectory[0]
+    assert (point.time_s, point.objective, point.lower_bound) == (r.runtime_s, r.objective, 1.0)
+    assert r.to_dict()["trajectory"] == [{"time_s": r.runtime_s, "objective": r.objective,
+                                          "lower_bound": 1.0}]
+
+
+def test_trajectory_keeps_improvements_only_and_ends_at_the_answer(tiny):
+    """Reports that improve neither the objective nor the bound are dropped; objectives never
+    rise, bounds never fall, times never fall; the answer is appended when the solver did not
+    report it, and the listener sees every point as it is recorded."""
+    answer = evaluate(tiny, 0.5, (0, 1), (0, 1)).objective
+    calls = [(answer + 50, None), (answer + 60, 1.0), (None, 5.0), (None, 2.0), (answer + 10, None),
+             (answer + 10, None), (answer + 20, 7.0)]
+    seen = []
+    r = run_solver(Reporting(calls, lower_bound=3.0), tiny, 0.5, on_progress=seen.append)
+    got = [(p.objective, p.lower_bound) for p in r.trajectory]
+    assert got == [(answer + 50, None), (answer + 50, 1.0), (answer + 50, 5.0),
+                   (answer + 10, 5.0), (answer + 10, 7.0), (answer, 7.0)]
+    times = [p.time_s for p in r.trajectory]
+    assert times == sorted(times) and times[-1] == r.runtime_s
+    assert seen == list(r.trajectory)
+
+
+def test_the_answer_is_not_repeated_when_the_solver_reported_it(tiny):
+    """A solver that reported its answer (within rounding) gets no extra point, and the last
+    point is the evaluator's number exactly."""
+    answer = evaluate(tiny, 0.5, (0, 1), (0, 1)).objective
+    r = run_solver(Reporting([(answer + 1, None), (answer * (1 - 1e-12), None)]), tiny, 0.5)
+    assert [p.objective for p in r.trajectory] == [answer + 1, answer]
+    assert r.trajectory[-1].objective == r.objective
+
+
+@pytest.mark.parametrize(("calls", "message"), [
+    ([(1.0, None)], "reported objective 1.0 below its answer's"),
+    ([(None, 1e9)], "reported lower bound 1000000000.0 above its answer's"),
+    ([(float("nan"), None)], "reported objective nan, not a finite number"),
+    ([(None, "x")], "reported lower bound 'x', not a finite number"),
+])
+def test_a_trajectory_the_answer_contradicts_is_a_solver_error(tiny, calls, message):
+    """An objective reported below the answer, a bound above it or a non-number is a
+    SolverError after the solve (the callback itself never raises into the solver)."""
+    with pytest.raises(SolverError, match=message):
+        run_solver(Reporting(calls), tiny, 0.5)
+
+
+def test_trajectory_point_gap_and_keywords():
+    """A point's gap is relative to its objective (None without a bound); takes_keyword reads
+    the declared keywords of solve, not a bare **kwargs."""
+    from gtsp_bench.solver import TrajectoryPoint, takes_keyword
+
+    assert TrajectoryPoint(1.0, 200.0, 150.0).gap == pytest.approx(0.25)
+    assert TrajectoryPoint(1.0, 200.0).gap is None
+
+    class Kwargs:
+        def solve(self, instance, omega, **rest):
+            pass
+
+    assert takes_keyword(Reporting([]), "progress") and not takes_keyword(Fixed(), "progress")
+    assert takes_keyword(WarmStarted, "initial") and not takes_keyword(Kwargs(), "initial")
+
+
+# ---------------------------------------------------------------------- warm starts
+def test_warm_start_is_checked_and_priced_before_the_solve(tiny):
+    """The solver gets a Solution priced by the evaluator, with the caller's bound; (order,
+    heads), a Solution and a Result are all accepted."""
+    solver = WarmStarted()
+    objective = evaluate(tiny, 0.5, (1, 0), (0, 0)).objective
+    r = run_solver(solver, tiny, 0.5, initial=((1, 0), (0, 0)))
+    assert solver.got == Solution((1, 0), (0, 0), objective, "feasible", None)
+    assert (r.order, r.heads, r.objective) == ((1, 0), (0, 0), objective)
+    run_solver(solver, tiny, 0.5, initial=Solution((1, 0), (0, 0), 0.0, lower_bound=1.0))
+    assert solver.got.objective == objective and solver.got.lower_bound == 1.0
+    run_solver(solver, tiny, 0.5, initial=r)
+    assert solver.got.order == (1, 0)
+
+
+@pytest.mark.parametrize(("initial", "message"), [
+    (((0, 0), (0, 0)), "infeasible initial solution: cluster 0 is visited 2 times"),
+    (((0, 1), (0, 7)), r"infeasible initial solution: heads\[1\] = 7"),
+    (Solution((0, 1), (0, 0), 0.0, lower_bound=1e9), "lower bound 1000000000.0 is above its objective"),
+    ("tour", "an initial solution is a Solution, a Result or"),
+])
+def test_a_bad_warm_start_is_one_input_error(tiny, initial, message):
+    """An infeasible warm start, a bound above its objective or another type: one InputError
+    line, before the solver runs."""
+    solver = WarmStarted()
+    with pytest.raises(InputError, match=message):
+        run_solver(solver, tiny, 0.5, initial=initial)
+    assert not hasattr(solver, "got")
+
+
+def test_a_solver_without_initial_refuses_a_warm_start(tiny):
+    """A solver whose solve does not declare ``initial`` refuses a warm start in one line."""
+    with pytest.raises(InputError, match=r"^solver 'greedy' cannot start from an initial solution$"):
+        run_solver("greedy", tiny, 0.5, initial=((0, 1), (0, 0)))
+
+
+# ---------------------------------------------------------------------- seeds
+#: Options that let each solver end by its own criterion on a small instance, not by the clock.
+_OWN_END = {"aco": {"iterations": 20}, "aco+ls": {"iterations": 20}, "lns": {"stop_at_convergence": True},
+            "ortools": {"solution_limit": 100}, "pyvrp": {"no_improvement": 300}}
+
+
+@pytest.mark.parametrize("name", solver_names())
+def test_every_solver_repeats_its_tour_for_a_seed(name):
+    """Run twice with the same seed, ended by its own criterion (not the time limit), every
+    registered solver returns the same tour; an optional one that is not installed is skipped."""
+    from gtsp_bench.generator import generate_instance
+
+    # K = 5 clusters of 20 nodes (the drl policy's size); brute gets 4 nodes a cluster
+    inst = generate_instance(5, 4 if name == "brute" else 20, seed=11)
+    try:
+        solver = get_solver(name, **_OWN_END.get(name, {}))
+    except InputError as e:
+        pytest.skip(str(e))
+    runs = [run_solver(solver, inst, 0.4, time_limit=120.0, seed=3) for _ in range(2)]
+    assert all(r.status != "time_limit" for r in runs)
+    assert (runs[0].order, runs[0].heads) == (runs[1].order, runs[1].heads)

@@ -87,7 +87,8 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
     The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint; a message with
     solver ``options`` is solved by a solver built with them (once per set of options). An
     :class:`InputError` becomes a ``refused`` record, a :class:`MemoryError` a ``failed`` one with
-    cause ``infrastructure``, any other exception a ``failed`` one with cause ``solver``.
+    cause ``infrastructure``, any other exception a ``failed`` one with cause ``solver``. A solved
+    record has the result's ``trajectory`` as ``[[time_s, objective, lower_bound], ...]``.
     """
     from gtsp_bench.data.parse import parse_instance_text
     from gtsp_bench.errors import InputError
@@ -135,6 +136,8 @@ def _record(res: Any) -> dict[str, Any]:
         "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
         "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
         "note": "", "stats": _plain(res.stats),
+        # each improvement as [seconds, objective, lower bound or null]; the last is the answer
+        "trajectory": [[p.time_s, p.objective, p.lower_bound] for p in res.trajectory],
     }
 
 

@@ -98,6 +98,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", metavar="SOL.json", help="also write the result JSON here")
     p.add_argument("--tour", metavar="OUT.tour",
                    help="also write the tour as a TSPLIB tour file here (.tour or .tour.gz)")
+    p.add_argument("--initial", metavar="SOL",
+                   help="warm start from this solution (a JSON file as 'solve --json' prints, whose "
+                   "'lower_bound', if any, is taken as claimed, or a .tour file): lns, milp, "
+                   "gurobi, greedy+ls, ortools and lkh take one")
+    p.add_argument("--progress", action="store_true",
+                   help="print each improvement (time, objective, bound, gap) on stderr")
     p.set_defaults(handler=_cmd_solve)
 
     p = sub.add_parser("evaluate", help="re-price a solution file",
@@ -253,9 +259,26 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from gtsp_bench.checks import check_omega, check_time_limit
-    from gtsp_bench.data.io import atomic_write_text, check_tour_name, read_instance, write_tour
-    from gtsp_bench.registry import get_solver, run_solver
+    import gzip
+
+    from gtsp_bench.checks import check_omega, check_time_limit, is_number
+    from gtsp_bench.data.io import (
+        TOUR_SUFFIX,
+        atomic_write_text,
+        check_tour_name,
+        format_suffix,
+        read_instance,
+        read_solution_file,
+        write_tour,
+    )
+    from gtsp_bench.registry import check_initial, check_warm_start, get_solver, run_solver
+    from gtsp_bench.solver import Solution, TrajectoryPoint
+
+    def show(point: TrajectoryPoint) -> None:  # --progress: one line per improvement
+        bound = "-" if point.lower_bound is None else f"{point.lower_bound:.6f}"
+        gap = "-" if point.gap is None else f"{100 * point.gap:.3f} %"
+        print(f"gtsp-bench: progress: {point.time_s:9.3f} s  objective {point.objective:.6f}  "
+              f"bound {bound}  gap {gap}", file=sys.stderr, flush=True)
 
     if args.tour:
         check_tour_name(args.tour)  # before a long solve
@@ -265,9 +288,27 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if instance.is_uav:
         check_omega(args.omega)  # argument errors first: they are not the file's
     check_time_limit(args.time_limit)
+    initial = None
+    if args.initial is not None:  # checked first; every problem is one line naming the file
+        path = args.initial
+        try:
+            check_warm_start(solver, args.solver)
+            order, heads = read_solution_file(path, instance)
+            bound = None
+            if format_suffix(path) != TOUR_SUFFIX:  # a JSON file may claim a bound
+                raw = Path(path).read_bytes()
+                bound = json.loads(gzip.decompress(raw) if path.lower().endswith(".gz") else raw
+                                   ).get("lower_bound")  # a claim, as the file's writer made it
+            if bound is not None and not is_number(bound):
+                raise InputError(f"'lower_bound' must be a number or null, not {bound!r}")
+            initial = check_initial(instance, args.omega if instance.is_uav else None,
+                                    Solution(tuple(order), tuple(heads), float("nan"), lower_bound=bound))
+        except InputError as e:
+            raise InputError(str(e) if str(e).startswith(f"{path}:") else f"{path}: {e}") from None
     try:
         result = run_solver(solver, instance, args.omega, time_limit=args.time_limit,
-                            seed=args.seed, name=args.solver)
+                            seed=args.seed, name=args.solver, initial=initial,
+                            on_progress=show if args.progress else None)
     except InputError as e:  # the solver refuses this instance: say which file
         where = str(args.file)
         raise InputError(str(e) if str(e).startswith(where) else f"{where}: {e}") from None

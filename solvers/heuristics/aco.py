@@ -26,7 +26,7 @@ from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_aft
 from gtsp_bench.checks import check_float, check_int
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Share of the time limit ``aco+ls`` keeps for its local search: the colony stops earlier.
 LS_SHARE = 0.2
@@ -43,8 +43,9 @@ def aco_search(
     q: float,
     rng: np.random.Generator,
     deadline: float | None = None,
+    progress: Progress = no_progress,
 ) -> tuple[np.ndarray, float, int, bool]:
-    """Run the ant system on a priced problem.
+    """Run the ant system on a priced problem, reporting each better tour to ``progress``.
 
     Returns
     -------
@@ -96,6 +97,7 @@ def aco_search(
         i = int(np.argmin(costs))
         if costs[i] < best_cost:
             best_cost, best_tour = float(costs[i]), tours[i].copy()
+            progress(best_cost)
         tau *= 1.0 - rho
         deposit = np.repeat(q / np.maximum(costs, 1e-300), k)
         np.add.at(tau, (tours.ravel(), closed.ravel()), deposit)
@@ -142,29 +144,33 @@ class Aco:
         self.q = check_float("q", q, 0.0, math.inf)
 
     def search(
-        self, problem: Problem, *, deadline: float | None, seed: int
+        self, problem: Problem, *, deadline: float | None, seed: int,
+        progress: Progress = no_progress,
     ) -> tuple[np.ndarray, float, int, bool]:
         """:func:`aco_search` with this solver's settings."""
         return aco_search(
             problem, ants=self.ants, iterations=self.iterations, rho=self.rho, alpha=self.alpha,
             beta=self.beta, q=self.q, rng=np.random.default_rng(seed), deadline=deadline,
+            progress=progress,
         )
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, progress: Progress = no_progress,
     ) -> Solution:
         """Run the colony (then the local search for ``aco+ls``); stop early with status
-        ``time_limit`` when the limit passes."""
+        ``time_limit`` when the limit passes. Each better tour is reported to ``progress``."""
         deadline = deadline_after(time_limit)
         search_deadline = deadline
         if self.local_search and deadline is not None:  # keep the local search its share
             search_deadline = deadline - LS_SHARE * float(time_limit)  # type: ignore[arg-type]
         problem = price(instance, omega)
-        tour, cost, done, timed_out = self.search(problem, deadline=search_deadline, seed=seed)
+        tour, cost, done, timed_out = self.search(problem, deadline=search_deadline, seed=seed,
+                                                  progress=progress)
         stats = {"iterations": done}
         if self.local_search:
-            return improved_solution(problem, tour, deadline, timed_out=timed_out, stats=stats)
+            return improved_solution(problem, tour, deadline, timed_out=timed_out, stats=stats,
+                                     progress=progress)
         order, heads = problem.to_solution(tour)
         return Solution(order, heads, objective=cost,
                         status="time_limit" if timed_out else "feasible", stats=stats)

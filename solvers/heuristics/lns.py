@@ -1,46 +1,26 @@
 """A GLNS-class large neighbourhood search (after Smith and Imeson, Comput. Oper. Res. 87, 2017).
 
-Each iteration removes some clusters from the current tour and puts them back:
-
-* removal (1 to ``remove_fraction`` of the clusters, at most ``max_removals``): **random**
-  clusters, the **worst** ones (the largest saving when removed, randomised), a **segment** of
-  consecutive clusters, or the clusters whose heads are nearest a random head (**distance**);
-* insertion: the pending cluster **cheapest** to insert goes in next, or the **farthest** (dearest),
-  or a **randomised** pick, each at its cheapest edge and head; every other iteration adds noise (up to
-  ``noise`` times the mean edge cost) to the prices;
-
-then a local search (:mod:`gtsp_bench.solvers.heuristics.lns_local`: 2-opt, or-opt of 2-3 cluster
-runs, GLNS's "moveopt" and "reopt"). The inner loops are compiled with numba. The operators are
-drawn by roulette on adaptive weights (each updated with the score of its iterations: new best 3,
-better than the current 2, accepted 1, rejected 0). A new tour replaces the current one by
-simulated-annealing acceptance, the temperature cooling geometrically over a trial from
-``start_temperature`` to ``end_temperature`` times the mean edge cost of the tour. A trial ends
-after ``iterations`` iterations or ``patience`` without a new trial best (by default only with
-``stop_at_convergence``: a search that uses its time limit lets each trial cool all the way, from a
-hotter start); the first trial starts from the greedy tour (or on planar instances, with ``macro``, the
-macro tour, which on a clustered instance enters each group of clusters once: ``macro_groups``)
-improved by the local search (with ``starts``, from the best of several first tours
-after a short trial each), later ones
-from the best tour so far, and a trial that did not improve it makes the next one hotter
-(temperatures and noise doubled, up to ``MAX_HEAT`` times). A search that uses its time limit fits
-its trials to it (``fit_to_time``, ``fit_trials``). Above ``LARGE`` clusters an iteration takes the
-windowed re-opt, sampled removals and reversing or-opt of
-:mod:`gtsp_bench.solvers.heuristics.lns_window`, and the neighbour lists take the nearest clusters of
-each quadrant (``quadrants``); on large planar instances the edge costs come from the coordinates
-(``points``, :mod:`gtsp_bench.solvers.heuristics.lns_costs`). There, on symmetric costs, the last
-``paths`` share of the budget (0.3) re-solves regions of the best tour: the clusters nearest a
-random one, with the tour's paths through them
-(:mod:`gtsp_bench.solvers.heuristics.lns_paths`), and ``fail_passes`` (off by default) does so
-after each trial that did not improve its start. With a time limit above ``LARGE`` clusters the
-search runs on ``workers`` threads, two where the cores allow
-(:mod:`gtsp_bench.solvers.heuristics.lns_islands`).
+Each iteration removes some clusters from the current tour (**random**, **worst**, a **segment**,
+or those nearest a random head: **distance**) and puts them back (the **cheapest**, **farthest**
+or a **randomised** pick next, each at its cheapest edge and head, prices noisy every other
+iteration), then runs the local search of :mod:`gtsp_bench.solvers.heuristics.lns_local`. The
+inner loops are compiled with numba. Operators are drawn by roulette on adaptive weights; a new
+tour replaces the current one by simulated-annealing acceptance, cooling over a trial. The first
+trial starts from the greedy tour (or the warm start, the macro tour, or the best of a race of
+``starts``) improved by the local search, later ones from the best tour so far; a trial that did
+not improve it makes the next one hotter, and after ``restart_after`` such trials the next starts
+cold from a random-insertion tour. Above ``LARGE`` clusters the windowed re-opt and sampled
+removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`, quadrant neighbour lists, edge costs
+from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re-solves at the end
+(:mod:`gtsp_bench.solvers.heuristics.lns_paths`) and two threads
+(:mod:`gtsp_bench.solvers.heuristics.lns_islands`) apply. ``docs/solvers/heuristics.md`` (lns)
+describes every option and the measurements behind the defaults.
 
 The search has converged after ``trials`` trials. It then goes on with more trials until the time
-limit (status ``feasible``: its own criterion was met), unless ``stop_at_convergence`` asks it to
-stop there. Such a search also restarts cold (GLNS's cold trials): after ``restart_after`` trials
-in a row that did not improve the tour they started from, the next starts from a fresh
-random-insertion tour, and the trials after it from that run's best. A run that converges is
-reproducible for a seed; one cut by the time limit before it converged has status ``time_limit``.
+limit (status ``feasible``), unless ``stop_at_convergence`` asks it to stop there; a search that
+uses its time limit fits its trials to it (``fit_to_time``, ``fit_trials``). A run that converges
+is reproducible for a seed; one cut by the time limit before it converged has status
+``time_limit``.
 """
 
 from __future__ import annotations
@@ -72,7 +52,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
 #: A trial that does not improve the best tour doubles the next one's temperatures, up to this factor.
@@ -253,10 +233,13 @@ class _Run:
 class _Search:
     """State of one LNS run on a priced problem."""
 
-    def __init__(self, problem: Problem, settings: LnsSettings, rng: np.random.Generator) -> None:
+    def __init__(self, problem: Problem, settings: LnsSettings, rng: np.random.Generator,
+                 initial: np.ndarray | None = None, progress: Progress = no_progress) -> None:
         self.p = problem
         self.s = settings
         self.rng = rng
+        self.initial = initial  #: a warm start's tour (node ids), the first tour
+        self.progress = progress  #: told each better tour's cost
         self.edge = kernel_costs(problem, settings.points)
         self.node = np.ascontiguousarray(problem.node_cost, dtype=np.float64)
         self.start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
@@ -296,8 +279,11 @@ class _Search:
     def start_tour(self, kind: str, deadline: float | None) -> np.ndarray:
         """A first tour before the local search: ``"macro"``, the macro tour on a planar instance
         (:mod:`gtsp_bench.solvers.heuristics.lns_macro`; elsewhere the greedy tour); ``"random"``,
-        a random-insertion tour (the cold restarts' start); else the greedy tour."""
+        a random-insertion tour (the cold restarts' start); ``"initial"``, the warm start; else the
+        greedy tour."""
         n = self.p.n_clusters
+        if kind == "initial" and self.initial is not None:
+            return self.initial.copy()
         if kind == "random":
             return kernels.random_insertion_tour(self.edge, self.node, self.start, self.near,
                                                  self.cluster_of)
@@ -308,9 +294,10 @@ class _Search:
         return macro_tour(order, self.edge, self.node, self.start, self.cluster_of)
 
     def start_kinds(self) -> list[str]:
-        """The first tours to race (:meth:`race`): the first ``starts`` of greedy, macro (planar
-        instances only), then random-insertion tours."""
-        kinds = ["greedy"] + (["macro"] if self.centre is not None else [])
+        """The first tours to race (:meth:`race`): the first ``starts`` of the warm start (if
+        any), greedy, macro (planar instances only), then random-insertion tours."""
+        kinds = ["initial"] if self.initial is not None else []
+        kinds += ["greedy"] + (["macro"] if self.centre is not None else [])
         return (kinds + ["random"] * self.s.starts)[: self.s.starts]
 
     def trial_settings(self, cur: np.ndarray, heat: float, iterations: int,
@@ -357,9 +344,10 @@ class _Search:
             clock0 = time.perf_counter()  # the race counts in the rate of iterations
             best, best_cost, weights_r, weights_i, done = self.race(kinds, deadline)
         else:  # up to 3 clusters the re-opt solves it
-            kind = kind or ("macro" if s.macro else "greedy")
+            kind = kind or ("initial" if self.initial is not None else "macro" if s.macro else "greedy")
             best, best_cost = self.local_search(self.start_tour(kind, deadline))
             clock0 = time.perf_counter()
+        self.progress(best_cost)
         return _Run(best, best_cost, weights_r, weights_i, clock0, done, best_at=done)
 
     def trials(self, run: _Run, deadline: float | None, rng: np.random.Generator) -> None:
@@ -386,6 +374,7 @@ class _Search:
                 heat, fails = 1.0, 0
                 if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                     run.best, run.best_cost = base.copy(), base_cost
+                    self.progress(run.best_cost)
             cur, trial_best = base.copy(), base.copy()
             settings = self.trial_settings(cur, heat, iterations, patience)
             costs = np.array([base_cost, run.best_cost, base_cost])
@@ -402,6 +391,8 @@ class _Search:
                     steps = min(2 * steps, iterations)
                 elif spent > 2 * CHUNK_SECONDS:
                     steps = max(1, steps // 2)
+                if costs[1] < run.best_cost:
+                    self.progress(float(costs[1]))
                 run.best_cost, run.done, run.best_at = float(costs[1]), int(counts[2]), int(counts[3])
                 if fit and not ended and run.done > 0:
                     # The trial ends with the budget, cooled, when it cannot run all its iterations:
@@ -434,6 +425,7 @@ class _Search:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                             run.best, run.best_cost = base.copy(), base_cost
+                            self.progress(base_cost)
             run.converged = run.converged or run.trials >= s.trials
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
@@ -451,6 +443,7 @@ class _Search:
         """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``."""
         self.polish(run, run.best, deadline, rng)
         run.best_cost = self.p.tour_cost(run.best)
+        self.progress(run.best_cost)
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
         """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
@@ -487,116 +480,71 @@ class _Search:
 class Lns:
     """GLNS-style large neighbourhood search, compiled inner loops (module docstring).
 
-    Asymmetric (directed) costs are priced in their direction: insertion, move and re-opt take
-    each edge from its tail to its head, and the 2-opt (which reverses part of the tour) is left
-    out.
+    Asymmetric costs are priced in their direction (no 2-opt there). Each option is a field of
+    :class:`LnsSettings`; ``docs/solvers/heuristics.md`` (lns) gives the details and measurements.
+
+    Warm start (``initial``): the first trial starts from that tour, improved by the local search
+    (with ``starts``, it is the first tour raced; above ``LARGE`` clusters with two threads, the
+    first island's). A warm start whose claimed lower bound meets its objective is returned at
+    once, unchanged: nothing can improve it. Each better tour is reported to ``progress``.
 
     Parameters
     ----------
-    iterations
-        Iterations per trial (default ``max(100, 25 n)``, n = clusters incl. the depot's).
-    trials
-        Trials until the search counts as converged; each restarts the temperature from the best
-        tour so far.
-    patience
-        Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
-        ``stop_at_convergence``, else none: a trial runs all its iterations).
-    remove_fraction
-        At most this share of the clusters is removed per iteration, in (0, 1].
-    max_removals
-        And at most this many clusters (>= 1; default 100, or 25 above ``LARGE`` clusters).
+    iterations, trials, patience
+        Iterations per trial (default ``max(100, 25 n)``, n = clusters incl. the depot's); trials
+        until the search counts as converged; iterations without a new trial best that end a
+        trial (default ``max(50, 5 n)`` with ``stop_at_convergence``, else none).
+    remove_fraction, max_removals
+        At most this share of the clusters, in (0, 1], and at most this many (>= 1; default 100,
+        or 25 above ``LARGE`` clusters) are removed per iteration.
     start_temperature, end_temperature
         Annealing temperatures as multiples of the tour's mean edge cost (>= 0; defaults 0.3 with
         ``stop_at_convergence``, else 1.0, and 0.003).
-    reaction
-        Weight of the newest score in an operator's weight, in (0, 1].
-    noise
-        Noisy insertions add up to ``noise`` times the mean edge cost to each price (>= 0).
+    reaction, noise
+        Weight of the newest score in an operator's weight, in (0, 1]; noisy insertions add up
+        to ``noise`` times the mean edge cost to each price (>= 0).
     neighbours
-        The local search's moves join a cluster only to its ``neighbours`` nearest clusters
-        (default 10 on symmetric costs, all clusters on asymmetric ones).
+        Moves join a cluster only to its nearest clusters (default 10; all on asymmetric costs).
     stop_at_convergence
         Stop after ``trials`` trials instead of going on with more until the time limit.
     restart_after
-        Without ``stop_at_convergence``, after this many trials in a row that did not improve
-        the tour they started from, the next starts from a fresh random-insertion tour (GLNS's
-        cold restart; later trials start from that run's best). 0: never.
+        Trials in a row without improvement before a cold restart (0: never).
     reopt_window
-        An iteration's local search re-opts only the heads within this many positions of a
-        changed cluster (:mod:`gtsp_bench.solvers.heuristics.lns_window`; >= 0, default 0 = the
-        full re-opt up to ``LARGE`` clusters, 4 above).
-    fit_to_time
-        Without ``stop_at_convergence``, a trial that the time left cannot finish (at the rate of
-        iterations so far) is shortened to end, cooled, at the time limit; its length is
-        re-estimated between the compiled chunks.
-    fit_trials
-        With ``fit_to_time``, trials are also short enough (at the rate so far) for this many to
-        fit in the time limit, but at least ``FIT_FLOOR`` iterations per cluster (>= 1, default
-        32): on a short budget, more and shorter trials, so that the cold restarts come in time.
-        Above ``LARGE`` clusters only the time limit shortens a trial (trials of 10 iterations per
-        cluster ended there about where they began).
-    points
-        Compute each edge cost from the coordinates where it is needed instead of reading the
-        cost matrix (:mod:`gtsp_bench.solvers.heuristics.lns_costs`; the same numbers, so the same
-        search). Default ``None``: from ``POINTS_FROM`` (2,000) nodes up, when the instance's rule
-        is planar (EUCLIDEAN, EUC_2D, CEIL_2D); the matrix is then never built.
-    quadrants
-        The moves' neighbour lists hold the ``neighbours // 4`` nearest clusters in each quadrant
-        around a cluster's centre, the rest the nearest of all (on a planar instance; default:
-        above ``LARGE`` clusters). On clustered instances the nearest clusters all lie in one
-        group, and no move would join two groups.
-    macro
-        The first trial starts from the macro tour (on a planar instance; default off) instead of
-        the greedy tour: the clusters in the order of a short tour through their centres, solved
-        by these kernels on a one-node-per-cluster instance, with optimal heads for that order
-        (:mod:`gtsp_bench.solvers.heuristics.lns_macro`). From the greedy tour the first trial
-        keeps its order of the point groups; on the five large files above 1 % the macro tour
-        lowered the mean gap (60 s, seeds 1-3), but it raised 633E3k.0, 1183rl5915 and
-        2702usa13509 above 1 % (docs/notes/lns-vs-glns.md), so it is not the default.
-    macro_iterations
-        Iterations per cluster of the centre tour's annealing trial (>= 0; 0: random insertion and
-        local search only).
-    macro_groups
-        The macro tour enters each group of centres once: centres at most this many times the
-        median distance between nearest centres apart are one group
-        (:func:`~gtsp_bench.solvers.heuristics.lns_macro.centre_groups`; >= 0, default 5; 0: no
-        groups). Changes only clustered instances (2000C10k.0 has 34 groups; the uniform, road
-        and city files one or a few).
-    starts
-        First tours raced (>= 1; default 1, no race): the first ``starts`` of the greedy tour,
-        the macro tour (planar instances) and random-insertion tours, each improved by the local
-        search and then by one short trial (``start_iterations`` per cluster, annealed over the
-        usual temperatures); the usual trials start from the best of those trials. With a race
-        ``macro`` has no effect.
-    start_iterations
-        Iterations per cluster of each raced start's trial (>= 1, at least 100 in all).
-    paths
-        Share of the time limit, in [0, 1], kept for region re-solves of the best tour at the
-        end (above ``LARGE`` clusters, symmetric costs, with a time limit and without
-        ``stop_at_convergence``; default 0.3, 0: none): the ``path_clusters`` clusters nearest
-        a random cluster (by their centres on planar instances, else along the neighbour lists),
-        the tour's paths through them re-solved together as a small GTSP by these kernels (the
-        parts of the tour outside fixed) and put back when cheaper, region after region until the
-        limit (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
-    path_clusters
-        Clusters per region (>= 2; default 80).
-    path_iterations
-        Iterations per cluster of a region's annealing trial (>= 0; default 5; 0: its local
-        search only).
+        An iteration re-opts only the heads within this many positions of a change (>= 0; default
+        0 = the full re-opt up to ``LARGE`` clusters, 4 above).
+    fit_to_time, fit_trials
+        Without ``stop_at_convergence``, trials end, cooled, at the limit and are short enough
+        for ``fit_trials`` (>= 1, default 32) to fit (at least ``FIT_FLOOR`` iterations per cluster).
+    points, quadrants
+        Edge costs from the coordinates, not the matrix (the same numbers; default from 2,000
+        nodes up on a planar rule); neighbour lists by quadrant around a cluster's centre
+        (planar instances; default above ``LARGE`` clusters).
+    macro, macro_iterations, macro_groups
+        The first trial starts from the macro tour (planar instances; default off): the clusters
+        in the order of a short tour through their centres (an annealing trial of
+        ``macro_iterations`` per cluster, >= 0), entering each group of centres at most
+        ``macro_groups`` (>= 0, default 5; 0: no groups) median nearest-centre distances apart
+        once, with optimal heads (:mod:`gtsp_bench.solvers.heuristics.lns_macro`).
+    starts, start_iterations
+        First tours raced (>= 1; default 1, no race): greedy, macro (planar instances), then
+        random insertion, each improved by the local search and one short trial of
+        ``start_iterations`` (>= 1) iterations per cluster; the trials start from the best.
+    paths, path_clusters, path_iterations
+        Share of the time limit, in [0, 1] (default 0.3), kept for region re-solves of the best
+        tour at the end (above ``LARGE`` clusters, symmetric costs, timed, without
+        ``stop_at_convergence``): the ``path_clusters`` (>= 2, default 80) clusters nearest a
+        random one, the tour's paths through them re-solved as a small GTSP with
+        ``path_iterations`` (>= 0, default 5) iterations per cluster
+        (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
-        Above ``LARGE`` clusters on symmetric costs, after each trial that did not improve the
-        tour it started from, this many passes of region re-solves (as ``paths``; a pass is
-        ``2 n / path_clusters`` regions) over that tour before the next trial (>= 0; default 0:
-        none).
-    workers
-        Threads of a time-limited search above ``LARGE`` clusters (>= 1; default: 2 where the
-        process may run on two cores and ``OMP_NUM_THREADS`` is not 1, else 1): the trials run as
-        islands from different first tours, and in the end phase each island re-solves regions
-        of its own best tour (:mod:`gtsp_bench.solvers.heuristics.lns_islands`). Up to ``LARGE`` clusters, and
-        with ``stop_at_convergence``, one thread: the same run as before, reproducible.
-    exchange
-        With ``workers`` > 1, the share of the trials' time after which every island goes on from
-        the best island's tour, in [0, 1] (default 0.5; 1: never).
+        Passes of region re-solves over the start of each trial that did not improve it (above
+        ``LARGE`` clusters, symmetric costs; >= 0, default 0).
+    workers, exchange
+        Threads of a timed search above ``LARGE`` clusters without ``stop_at_convergence`` (>= 1;
+        default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
+        islands that go on from the best island's tour after the ``exchange`` share of the
+        trials' time (in [0, 1], default 0.5; 1: never;
+        :mod:`gtsp_bench.solvers.heuristics.lns_islands`).
     """
 
     asymmetric = True
@@ -624,18 +572,27 @@ class Lns:
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
     ) -> Solution:
-        """Search until the time limit (or convergence with ``stop_at_convergence``).
+        """Search until the time limit (or convergence with ``stop_at_convergence``), from the
+        warm start ``initial`` if given (class docstring), reporting each better tour.
 
         Without a time limit, :func:`gtsp_bench.checks.default_time_limit` applies. The status is
         ``time_limit`` only when the limit came before the search converged.
         """
         time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         deadline = deadline_after(time_limit)
+        if initial is not None and initial.lower_bound is not None and \
+                initial.objective - initial.lower_bound <= REL_TOL * max(1.0, abs(initial.objective)):
+            progress(initial.objective)
+            return Solution(initial.order, initial.heads, initial.objective,
+                            stats={"warm_start": "at its lower bound"})
         problem = price(instance, omega)
-        search = _Search(problem, self.settings, np.random.default_rng(seed))
+        start = None if initial is None else problem.to_tour(initial.order, initial.heads)
+        search = _Search(problem, self.settings, np.random.default_rng(seed), start, progress)
         tour, _, stats, timed_out = search.run(deadline)
+        if initial is not None:
+            stats["warm_start"] = True
         order, heads = problem.to_solution(tour)
         return Solution(order, heads, objective=problem.tour_cost(tour),
                         status="time_limit" if timed_out else "feasible", stats=stats)

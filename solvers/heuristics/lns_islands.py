@@ -45,9 +45,10 @@ def default_workers(environ: dict[str, str] | None = None, cores: int | None = N
 
 
 def island_kinds(search: _Search, workers: int) -> list[str]:
-    """The first tour of each island: the search's usual start (greedy, or the macro tour with
-    ``macro``), then the macro tour where the instance has points, then random insertion."""
-    first = "macro" if search.s.macro else "greedy"
+    """The first tour of each island: the search's usual start (the warm start, else greedy, or
+    the macro tour with ``macro``), then the macro tour where the instance has points, then
+    random insertion."""
+    first = "initial" if search.initial is not None else "macro" if search.s.macro else "greedy"
     others = ["macro"] if search.centre is not None and first != "macro" else []
     return ([first] + others + ["random"] * workers)[:workers]
 

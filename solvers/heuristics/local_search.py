@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -34,7 +34,7 @@ from gtsp_bench.checks import check_time_limit
 from gtsp_bench.errors import InfeasibleSolutionError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
 REL_TOL = 1e-9
@@ -273,8 +273,9 @@ class LocalSearch:
             order = self.cluster_of[t]
         return optimal_heads(p, order)
 
-    def run(self, tour: Sequence[int], deadline: float | None = None) -> tuple[np.ndarray, float, bool]:
-        """Improve ``tour`` to a local optimum.
+    def run(self, tour: Sequence[int], deadline: float | None = None,
+            progress: Progress = no_progress) -> tuple[np.ndarray, float, bool]:
+        """Improve ``tour`` to a local optimum, reporting each cost on the way to ``progress``.
 
         Returns
         -------
@@ -286,6 +287,7 @@ class LocalSearch:
         cost = self.problem.tour_cost(t)
         timed_out = False
         while True:
+            progress(cost)
             if deadline is not None and time.perf_counter() > deadline:
                 timed_out = True
                 break
@@ -364,14 +366,15 @@ def is_past(deadline: float | None) -> bool:
 
 def improved_solution(
     problem: Problem, tour: Sequence[int], deadline: float | None, *, timed_out: bool = False,
-    stats: dict | None = None,
+    stats: dict | None = None, progress: Progress = no_progress,
 ) -> Solution:
-    """The :class:`Solution` of ``tour`` after :func:`improve` (the ``+ls`` solver variants).
+    """The :class:`Solution` of ``tour`` after :func:`improve` (the ``+ls`` solver variants),
+    each better tour on the way reported to ``progress``.
 
     Its status is ``time_limit`` when ``timed_out`` (the first stage stopped early) or when the
     deadline stops the local search.
     """
-    tour, cost, ls_timed_out = LocalSearch(problem).run(tour, deadline)
+    tour, cost, ls_timed_out = LocalSearch(problem).run(tour, deadline, progress)
     order, heads = problem.to_solution(tour)
     return Solution(order, heads, objective=cost,
                     status="time_limit" if timed_out or ls_timed_out else "feasible",
@@ -380,14 +383,17 @@ def improved_solution(
 
 class GreedyLS(Greedy):
     """The paper's greedy (:class:`gtsp_bench.solvers.heuristics.greedy.Greedy`), then
-    :func:`improve` on its tour."""
+    :func:`improve` on its tour; or, given a warm start (``initial``), :func:`improve` on that."""
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
     ) -> Solution:
-        """Build the greedy tour, then improve it (stopping at the time limit)."""
+        """Build the greedy tour (or take ``initial``), then improve it (stopping at the time
+        limit), reporting each better tour to ``progress``."""
         deadline = deadline_after(time_limit)
-        sol = super().solve(instance, omega, time_limit=time_limit, seed=seed)
+        sol = initial or super().solve(instance, omega, time_limit=time_limit, seed=seed)
         problem = price(instance, omega)
-        return improved_solution(problem, problem.to_tour(sol.order, sol.heads), deadline)
+        out = improved_solution(problem, problem.to_tour(sol.order, sol.heads), deadline,
+                                progress=progress)
+        return out if initial is None else replace(out, stats={**out.stats, "warm_start": True})

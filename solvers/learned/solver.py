@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import torch
@@ -27,7 +27,7 @@ from torch import nn
 from gtsp_bench.checks import check_bool, check_choice, check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 
 class LearnedSolver:
@@ -78,12 +78,17 @@ class LearnedSolver:
             self._model = load_policy(self.checkpoint, self.model_name)
         return self._model
 
-    def candidates(self, env: EnvBatch, generator: torch.Generator) -> torch.Tensor:
+    def candidates(self, env: EnvBatch, generator: torch.Generator,
+                   on_greedy: Callable[[torch.Tensor], None] | None = None) -> torch.Tensor:
         """``(B, R, K)`` candidate orders per instance (greedy first, then samples, then each of
-        them reversed if ``reverse``)."""
+        them reversed if ``reverse``); ``on_greedy`` sees the greedy ones (reversed too if
+        ``reverse``) before any is sampled."""
         b, _, _ = env.shape
         views = [env, mirror(env)] if self.augment else [env]
         orders = [self.model.decode(v, "greedy")[0].view(b, -1, env.shape[1]) for v in views]
+        if on_greedy is not None:
+            greedy = torch.cat(orders, dim=1)
+            on_greedy(torch.cat([greedy, greedy.flip(-1)], dim=1) if self.reverse else greedy)
         if self.samples:
             rep = env.repeat(self.samples)
             sampled, _ = self.model.decode(rep, "sample", generator=generator)
@@ -91,27 +96,42 @@ class LearnedSolver:
         cand = torch.cat(orders, dim=1)
         return torch.cat([cand, cand.flip(-1)], dim=1) if self.reverse else cand
 
-    def solve_env(self, env: EnvBatch, seed: int = 0) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Best candidate per instance: ``order (B, K)``, ``heads (B, K)``, ``cost (B,)``."""
+    def price(self, env: EnvBatch, cand: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Heads ``(B * R, K)`` by the head rule and costs ``(B, R)`` of candidates ``(B, R, K)``."""
+        b, r, k = cand.shape
+        rep = env.repeat(r)
+        flat = cand.reshape(b * r, k)
+        heads = choose_heads(rep, flat, self.heads)
+        return heads, tour_cost(rep, flat, heads).view(b, r)
+
+    def solve_env(self, env: EnvBatch, seed: int = 0, progress: Progress = no_progress
+                  ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Best candidate per instance: ``order (B, K)``, ``heads (B, K)``, ``cost (B,)``. With
+        samples and a batch of one, the best greedy tour's cost goes to ``progress`` before any
+        tour is sampled (the same answer: greedy decoding draws no random numbers)."""
         torch.set_num_threads(self.threads)
         generator = torch.Generator().manual_seed(int(seed))
+
+        def on_greedy(cand: torch.Tensor) -> None:
+            progress(float(self.price(env, cand)[1].min()))
+
+        tell = on_greedy if self.samples and env.shape[0] == 1 and progress is not no_progress else None
         with torch.inference_mode():
-            cand = self.candidates(env, generator)  # (B, R, K)
+            # (B, R, K); a subclass's own candidates() (local) takes no on_greedy: it has no samples
+            cand = self.candidates(env, generator) if tell is None else self.candidates(env, generator, tell)
             b, r, k = cand.shape
-            rep = env.repeat(r)
-            flat = cand.reshape(b * r, k)
-            heads = choose_heads(rep, flat, self.heads)
-            cost = tour_cost(rep, flat, heads).view(b, r)
+            heads, cost = self.price(env, cand)
             best = cost.argmin(1)
             rows = torch.arange(b)
             return cand[rows, best], heads.view(b, r, k)[rows, best], cost[rows, best]
 
     def solve_batch(self, instances: Sequence[Instance], omegas: Sequence[float], *,
-                    seed: int = 0) -> list[Solution]:
-        """Solve many instances of one K at once (what the benchmark times)."""
+                    seed: int = 0, progress: Progress = no_progress) -> list[Solution]:
+        """Solve many instances of one K at once (what the benchmark times); ``progress``: see
+        :meth:`solve_env`."""
         start = time.perf_counter()
         env = env_from_instances(instances, omegas)
-        order, heads, cost = self.solve_env(env, seed)
+        order, heads, cost = self.solve_env(env, seed, progress)
         out = []
         for i, inst in enumerate(instances):
             o = tuple(int(c) for c in order[i])
@@ -124,11 +144,12 @@ class LearnedSolver:
         return [dataclasses.replace(sol, stats={**sol.stats, **stats}) for sol in out]
 
     def solve(self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-              seed: int = 0) -> Solution:
-        """Decode one instance (a batch of one); ``time_limit`` is not needed (milliseconds)."""
+              seed: int = 0, progress: Progress = no_progress) -> Solution:
+        """Decode one instance (a batch of one); ``time_limit`` is not needed (milliseconds).
+        With samples, the best greedy tour is reported to ``progress`` before the sampling."""
         if omega is None:
             raise InputError(f"{instance.name}: learned policies need a UAV instance and omega")
-        return self.solve_batch([instance], [omega], seed=seed)[0]
+        return self.solve_batch([instance], [omega], seed=seed, progress=progress)[0]
 
 
 class DRL(LearnedSolver):

@@ -40,7 +40,11 @@ n = 1000, 25 s for n = 2000 and about 2 minutes for n = 4000 (K = 200 clusters o
 shared core, so large instances overshoot a short limit; ``subgradient=False`` cuts it to a
 fraction of a second. (LKH's ``TOTAL_TIME_LIMIT`` would count the preprocessing, but when it runs out first
 elkai returns no tour at all.) A run that stops on its own (``MAX_TRIALS``, by default n) is
-reproducible for a seed; one stopped by the limit is not. elkai's public
+reproducible for a seed; one stopped by the limit is not. A warm start becomes LKH's
+``INITIAL_TOUR_FILE``: the Noon-Bean tour of the given GTSP tour (:func:`atsp_tour`). elkai's LKH
+keeps that file name for every later call in the process (a later run without a warm start then
+fails on the deleted file), so a warm-started run happens in a forked child process
+(:func:`_solve_apart`). elkai's public
 ``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function it wraps,
 ``elkai._elkai.solve_problem(params, problem)``, with a full LKH parameter text.
 
@@ -51,8 +55,11 @@ under the same restriction). It is an optional extra: ``pip install 'gtsp-bench[
 from __future__ import annotations
 
 import math
+import multiprocessing
+import tempfile
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 from gtsp_bench.solvers.heads import optimal_heads
@@ -123,6 +130,17 @@ def noon_bean(
         nodes = np.asarray(nodes, dtype=np.int64)
         out[np.roll(nodes, 1), nodes] = 0  # pred(u) -> u: the zero-cost cycle
     return out
+
+
+def atsp_tour(tour: Sequence[int], clusters: Sequence[np.ndarray], cluster_of: np.ndarray) -> np.ndarray:
+    """The contiguous Noon-Bean ATSP tour of a GTSP tour (node ids, one per cluster): each
+    cluster entered at its node in ``tour``, then walked round its cycle (the inverse of
+    :func:`tour_from_atsp`)."""
+    runs = []
+    for u in tour:
+        nodes = np.asarray(clusters[int(cluster_of[u])], dtype=np.int64)
+        runs.append(np.roll(nodes, -int(np.flatnonzero(nodes == u)[0])))
+    return np.concatenate(runs)
 
 
 def tour_from_atsp(atsp_tour: Sequence[int], cluster_of: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -215,9 +233,10 @@ class LKH:
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, initial: Solution | None = None,
     ) -> Solution:
-        """Transform, run LKH once, map back and price exactly."""
+        """Transform, run LKH once (from the warm start ``initial``, if given), map back and
+        price exactly."""
         elkai = _import_elkai()
         time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         start = time.perf_counter()
@@ -229,9 +248,19 @@ class LKH:
             weights, big_m, scale = scaled_weights(problem)
             stats.update(lkh=True, scale=scale, big_m=big_m)
             matrix = noon_bean(weights, problem.clusters, big_m)
-            left = max(time_limit - (time.perf_counter() - start), 1e-3)
-            atsp = np.asarray(elkai.solve_problem(self._params(left, seed),
-                                                  _problem_text(matrix)), dtype=np.int64) - 1
+            with tempfile.TemporaryDirectory(prefix="gtsp-lkh-") as folder:
+                first = None
+                if initial is not None:  # LKH reads an initial tour from a file only
+                    first = Path(folder) / "initial.tour"
+                    nodes = atsp_tour(problem.to_tour(initial.order, initial.heads), problem.clusters,
+                                      problem.cluster_of)
+                    first.write_text("TOUR_SECTION\n" + "\n".join(str(v + 1) for v in nodes.tolist())
+                                     + "\n-1\nEOF\n", encoding="ascii")
+                    stats["warm_start"] = True
+                left = max(time_limit - (time.perf_counter() - start), 1e-3)
+                params, text = self._params(left, seed, first), _problem_text(matrix)
+                found = elkai.solve_problem(params, text) if first is None else _solve_apart(params, text)
+                atsp = np.asarray(found, dtype=np.int64) - 1
             if sorted(atsp.tolist()) != list(range(problem.n_nodes)):
                 raise SolverError(f"LKH returned no tour through all nodes of {instance.name}")
             tour, contiguous = tour_from_atsp(atsp, problem.cluster_of)
@@ -247,17 +276,54 @@ class LKH:
         return Solution(order, heads, objective=problem.tour_cost(tour),
                         status="time_limit" if seconds >= time_limit else "feasible", stats=stats)
 
-    def _params(self, seconds: float, seed: int) -> str:
-        """LKH's parameter text: runs, trials, seed, precision and the time left (shared by the
-        runs; LKH's ``TIME_LIMIT`` is per run and leaves out the preprocessing)."""
+    def _params(self, seconds: float, seed: int, initial: Path | None = None) -> str:
+        """LKH's parameter text: runs, trials, seed, precision, the time left (shared by the
+        runs; LKH's ``TIME_LIMIT`` is per run and leaves out the preprocessing) and the initial
+        tour's file, if any."""
         lines = [f"RUNS = {self.runs}", f"SEED = {seed % (2**31 - 1) + 1}", f"PRECISION = {PRECISION}",
                  f"TIME_LIMIT = {seconds / self.runs:.6f}",
                  "PROBLEM_FILE = :stdin:"]
+        if initial is not None:
+            lines.insert(-1, f"INITIAL_TOUR_FILE = {initial}")
         if self.max_trials is not None:
             lines.insert(1, f"MAX_TRIALS = {self.max_trials}")
         if not self.subgradient:
             lines.insert(1, "SUBGRADIENT = NO")
         return "\n".join(lines) + "\n"
+
+
+def _solve_in_child(params: str, text: str, conn) -> None:
+    """A forked child's body (:func:`_solve_apart`): LKH's tour, or its error, sent on ``conn``."""
+    try:
+        conn.send(("ok", _import_elkai().solve_problem(params, text)))
+    except Exception as e:  # sent back whole: the parent raises it
+        conn.send(("error", f"{type(e).__name__}: {e}"))
+    finally:
+        conn.close()
+
+
+def _solve_apart(params: str, text: str) -> list[int]:
+    """``elkai._elkai.solve_problem(params, text)`` in a forked child process, so that what LKH
+    keeps between calls (the initial tour's file name) stays out of this process."""
+    ctx = multiprocessing.get_context("fork")
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_solve_in_child, args=(params, text, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        kind, value = receive.recv()
+    except EOFError:
+        raise SolverError(f"LKH's process ended without a tour (exit code {child.exitcode})") from None
+    finally:
+        receive.close()
+        if child.is_alive():
+            child.join(timeout=5.0)
+            if child.is_alive():
+                child.kill()
+        child.join()
+    if kind != "ok":
+        raise SolverError(f"LKH failed: {value}")
+    return value
 
 
 def _problem_text(matrix: np.ndarray) -> str:

@@ -39,12 +39,14 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import math
 import os
 import pickle
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -61,7 +63,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: First solution strategies (names of OR-Tools' ``FirstSolutionStrategy``) that build a tour of
 #: this model; ``EVALUATOR_STRATEGY`` (needs a callback), ``SWEEP`` (needs coordinates),
@@ -99,10 +101,15 @@ def _import_ortools():
 
 def route(
     cost: np.ndarray, sizes: list[int], first_solution: str, metaheuristic: str, seconds: float,
-    solution_limit: int | None, seed: int,
+    solution_limit: int | None, seed: int, initial: list[int] | None = None,
+    report: Callable[[list[int]], None] | None = None,
 ) -> dict[str, Any]:
     """One OR-Tools run (in the worker process): node 0 is the depot, then groups of ``sizes``
     nodes, each a mandatory disjunction of cardinality 1; ``cost`` is the integer arc matrix.
+
+    ``initial`` (the route's nodes after the depot) is the first solution when given, instead of
+    ``first_solution``'s; ``report`` is called with the route of each solution cheaper than the
+    ones before (from OR-Tools' solution callback).
 
     Returns ``visits`` (the route's nodes from the depot), ``solutions`` (found by the search),
     ``status`` (OR-Tools' name) and ``timed_out`` (the limit stopped the search).
@@ -124,8 +131,32 @@ def route(
     if solution_limit is not None:
         params.solution_limit = solution_limit
     params.log_search = False
+
+    def visits_now() -> list[int]:
+        out, index = [], routing.Start(0)
+        while not routing.IsEnd(index):
+            out.append(manager.IndexToNode(index))
+            index = routing.NextVar(index).Value()
+        return out
+
+    best = [math.inf]
+
+    def on_solution() -> None:  # (the assignment being accepted; its cost is CostVar's value)
+        value = routing.CostVar().Value()
+        if value < best[0]:
+            best[0] = value
+            report(visits_now())  # type: ignore[misc]
+
+    if report is not None:
+        routing.AddAtSolutionCallback(on_solution)
     began = time.perf_counter()
-    assignment = routing.SolveWithParameters(params)
+    if initial is not None:
+        start = routing.ReadAssignmentFromRoutes([initial], True)
+        if start is None:
+            raise SolverError("OR-Tools did not accept the initial route")
+        assignment = routing.SolveFromAssignmentWithParameters(start, params)
+    else:
+        assignment = routing.SolveWithParameters(params)
     took = time.perf_counter() - began
     status = enums.RoutingSearchStatus.Value.Name(routing.status())
     if assignment is None and status == "ROUTING_FAIL_TIMEOUT":
@@ -164,14 +195,20 @@ class _Worker:
             stderr=subprocess.DEVNULL, env=env,
         )
 
-    def call(self, request: dict[str, Any] | None) -> Any:
+    def call(self, request: dict[str, Any] | None,
+             on_route: Callable[[list[int]], None] | None = None) -> Any:
         """Send ``request`` (``None``: only read the handshake) and return the answer; a lost
-        worker is a :class:`SolverError`."""
+        worker is a :class:`SolverError`. Routes the worker sends before its answer (each better
+        solution, when the request asks for them) go to ``on_route`` as they come."""
         try:
             if request is not None:
                 pickle.dump(request, self.proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
                 self.proc.stdin.flush()
             kind, value = pickle.load(self.proc.stdout)
+            while kind == "route":
+                if on_route is not None:
+                    on_route(value)
+                kind, value = pickle.load(self.proc.stdout)
         except (EOFError, OSError, pickle.UnpicklingError):
             code = self.proc.poll()
             raise SolverError(f"the OR-Tools worker process ended (exit code {code})") from None
@@ -194,10 +231,12 @@ _WORKER: _Worker | None = None
 _LOCK = threading.Lock()
 
 
-def _call_worker(request: dict[str, Any] | None) -> Any:
+def _call_worker(request: dict[str, Any] | None,
+                 on_route: Callable[[list[int]], None] | None = None) -> Any:
     """Run ``request`` in this process's OR-Tools worker (started if needed; ``None``: just start
-    it). A request that does not come back whole (an error, an interrupt) drops the worker, so a
-    late answer can never be read as the next one's."""
+    it), passing the routes it reports on the way to ``on_route``. A request that does not come
+    back whole (an error, an interrupt) drops the worker, so a late answer can never be read as
+    the next one's."""
     global _WORKER
     with _LOCK:
         if _WORKER is None or _WORKER.pid != os.getpid() or _WORKER.proc.poll() is not None:
@@ -212,7 +251,7 @@ def _call_worker(request: dict[str, Any] | None) -> Any:
         if request is None:
             return None
         try:
-            return _WORKER.call(request)
+            return _WORKER.call(request, on_route)
         except SolverError:
             if _WORKER.proc.poll() is None:
                 raise  # OR-Tools' own error: the worker is fine
@@ -245,8 +284,12 @@ def _serve() -> None:
             request = pickle.load(source)
         except EOFError:
             return
+        report = None
+        if request.pop("report", False):
+            def report(visits: list[int]) -> None:
+                answer("route", visits)
         try:
-            result = ("ok", route(**request))
+            result = ("ok", route(**request, report=report))
         except Exception as e:  # sent back whole: the caller raises it
             result = (type(e).__name__, str(e))
         try:
@@ -288,9 +331,11 @@ class OrToolsPeer:
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
     ) -> Solution:
-        """Run OR-Tools (once per node of the smallest cluster when there is no depot)."""
+        """Run OR-Tools (once per node of the smallest cluster when there is no depot), from the
+        warm start ``initial`` if given (its route read in as the first solution; without a
+        depot, in the run from its head in the smallest cluster), reporting each better tour."""
         time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         seed = check_seed(seed)
         problem = price(instance, omega)
@@ -298,28 +343,41 @@ class OrToolsPeer:
         _call_worker(None)  # started (OR-Tools imported) outside the time limit, as imports are
         start = time.perf_counter()
         depots = depot_candidates(problem)
+        tour = None if initial is None else problem.to_tour(initial.order, initial.heads)
         best, best_cost, timed_out, solutions = best_of_runs(
             problem, depots, time_limit, start,
-            lambda depot, budget: self._run(problem, cost, depot, budget, seed), _MIN_RUN)
+            lambda depot, budget: self._run(problem, cost, depot, budget, seed, tour, progress),
+            _MIN_RUN)
         order, heads = problem.to_solution(best)
+        stats = {"solutions": solutions, "scale": scale, "runs": len(depots)}
+        if initial is not None:
+            stats["warm_start"] = True
         return Solution(order, heads, objective=best_cost,
-                        status="time_limit" if timed_out else "feasible",
-                        stats={"solutions": solutions, "scale": scale, "runs": len(depots)})
+                        status="time_limit" if timed_out else "feasible", stats=stats)
 
     def _run(
         self, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int,
+        initial: np.ndarray | None = None, progress: Progress = no_progress,
     ) -> tuple[np.ndarray, int, bool]:
-        """One OR-Tools run with ``depot`` as the depot: (tour, solutions, stopped by time)."""
+        """One OR-Tools run with ``depot`` as the depot: (tour, solutions, stopped by time); from
+        the tour ``initial`` (node ids) when it passes through ``depot``."""
         nodes, others = run_nodes(problem, depot)
         if not others:  # a single cluster and no depot: the tour is the node itself
+            progress(problem.tour_cost([depot]))
             return np.array([depot]), 0, False
+        route = None
+        if initial is not None and depot in initial:
+            local = {int(v): i for i, v in enumerate(nodes)}
+            at = int(np.flatnonzero(initial == depot)[0])
+            route = [local[int(v)] for v in np.roll(initial, -at)[1:]]
         try:
             out = _call_worker({
                 "cost": np.ascontiguousarray(cost[np.ix_(nodes, nodes)]),
                 "sizes": [len(problem.clusters[c]) for c in others],
                 "first_solution": self.first_solution, "metaheuristic": self.metaheuristic,
                 "seconds": seconds, "solution_limit": self.solution_limit, "seed": seed,
-            })
+                "initial": route, "report": progress is not no_progress,
+            }, lambda visits: progress(problem.tour_cost(nodes[visits])))
         except SolverError as e:
             raise SolverError(f"{problem.instance.name}: {e}") from None
         return nodes[out["visits"]], out["solutions"], out["timed_out"]

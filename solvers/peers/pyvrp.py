@@ -12,6 +12,9 @@ cluster is made the depot and the other clusters become groups; when that cluste
 PyVRP runs once per node (the time limit shared among the runs) and the best tour is kept, so the
 model stays exact. (GTSPLIB files all have a one-node cluster: a single run.)
 
+Each better tour PyVRP's iterated local search finds (its ``on_best`` callback) is mapped back,
+priced exactly and reported as it comes.
+
 PyVRP is an optional extra (``make install`` installs it); without it this solver raises a clear
 :class:`InputError`. It imports fine in one process together with highspy or ortools.
 """
@@ -32,7 +35,7 @@ from gtsp_bench.checks import (
 from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 
 def _import_pyvrp():
@@ -69,9 +72,10 @@ class PyVRPPeer:
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, progress: Progress = no_progress,
     ) -> Solution:
-        """Run PyVRP (once per node of the smallest cluster when there is no depot)."""
+        """Run PyVRP (once per node of the smallest cluster when there is no depot), reporting
+        each better tour to ``progress``."""
         pyvrp = _import_pyvrp()
         time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         start = time.perf_counter()
@@ -80,17 +84,38 @@ class PyVRPPeer:
         depots = depot_candidates(problem)
         best, best_cost, timed_out, iterations = best_of_runs(
             problem, depots, time_limit, start,
-            lambda depot, budget: self._run(pyvrp, problem, cost, depot, budget, seed), 1e-3)
+            lambda depot, budget: self._run(pyvrp, problem, cost, depot, budget, seed, progress),
+            1e-3)
         order, heads = problem.to_solution(best)
         return Solution(order, heads, objective=best_cost,
                         status="time_limit" if timed_out else "feasible",
                         stats={"iterations": iterations, "scale": scale, "runs": len(depots)})
 
     def _run(
-        self, pyvrp, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int
+        self, pyvrp, problem: Problem, cost: np.ndarray, depot: int, seconds: float, seed: int,
+        progress: Progress = no_progress,
     ) -> tuple[np.ndarray, int, bool]:
         """One PyVRP run with ``depot`` as the depot: (tour, iterations, stopped by time)."""
         nodes, others = run_nodes(problem, depot)
+
+        def tour_of(solution) -> np.ndarray | None:
+            """The tour of a PyVRP solution (node ids), ``None`` unless it is one feasible route."""
+            if not solution.is_feasible() or len(solution.routes()) != 1:
+                return None
+            visits = [1 + a.idx for a in solution.routes()[0] if a.type == pyvrp.ActivityType.CLIENT]
+            return nodes[[0, *visits]]
+
+        class Report(pyvrp.IteratedLocalSearchCallbacks):
+            """Each new best solution (and the first), priced exactly, to ``progress``."""
+
+            def on_start(self, ils) -> None:
+                self.on_best(ils.initial_solution)
+
+            def on_best(self, best) -> None:
+                tour = tour_of(best)
+                if tour is not None:
+                    progress(problem.tour_cost(tour))
+
         if not others:  # a single cluster and no depot: the tour is the node itself
             return np.array([depot]), 0, False
         locations = [pyvrp.Location(0.0, 0.0) for _ in nodes]  # coordinates unused: matrix given
@@ -108,10 +133,11 @@ class PyVRPPeer:
         stop = pyvrp.stop.MultipleCriteria([
             pyvrp.stop.MaxRuntime(seconds), pyvrp.stop.NoImprovement(self.no_improvement),
         ])
-        result = pyvrp.solve(data, stop, seed=seed, collect_stats=False, display=False)
-        if not result.is_feasible() or len(result.best.routes()) != 1:
+        params = pyvrp.SolveParams()
+        if progress is not no_progress:
+            params = pyvrp.SolveParams(ils=pyvrp.IteratedLocalSearchParams(callbacks=Report()))
+        result = pyvrp.solve(data, stop, seed=seed, collect_stats=False, display=False, params=params)
+        tour = tour_of(result.best)
+        if tour is None:
             raise SolverError(f"PyVRP found no feasible tour on {problem.instance.name}")
-        visits = [1 + a.idx for a in result.best.routes()[0]
-                  if a.type == pyvrp.ActivityType.CLIENT]
-        tour = nodes[[0, *visits]]
         return tour, int(result.num_iterations), result.runtime >= seconds * 0.99

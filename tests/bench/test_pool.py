@@ -119,3 +119,18 @@ def test_a_solver_that_cannot_be_built_fails_every_job_unpersisted():
         assert rec["status"] == "failed" and not persist
         assert rec["note"].startswith("solver could not be built: ")
         assert "not available" in rec["note"]
+
+
+def test_solve_message_record_carries_the_trajectory():
+    """A solved record holds the result's trajectory as [[time_s, objective, lower_bound], ...],
+    ending at the record's objective, and passes check_log_record; a failed one has none."""
+    from gtsp_bench.checks import check_log_record
+
+    rec = solve_message(Greedy(), "greedy", _msg(0.4), {})
+    assert len(rec["trajectory"]) == 1
+    t, objective, bound = rec["trajectory"][0]
+    assert 0 <= t <= rec["runtime_s"] and objective == rec["objective"] and bound is None
+    keyed = {**rec, "key": f"{INSTANCE.name}#ab|greedy|w=0.4|seed=0|tl=5", "solver": "greedy",
+             "omega": 0.4, "seed": 0}
+    assert check_log_record(json.loads(json.dumps(keyed)), INSTANCE.sizes) is not None
+    assert "trajectory" not in solve_message(Crash(), "crash", _msg(0.4), {})

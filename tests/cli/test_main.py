@@ -16,7 +16,7 @@ from gtsp_bench.cli import main
 from tests.conftest import GTSPLIB, REPO
 
 KEYS = ["instance", "solver", "omega", "order", "heads", "objective", "energy", "distance",
-        "status", "lower_bound", "runtime_s"]
+        "status", "lower_bound", "runtime_s", "trajectory"]
 
 
 @pytest.fixture
@@ -108,7 +108,23 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     folder.mkdir()
     berlin_tour = GTSPLIB / "tours" / "11berlin52.4040.tour.gz"
     kroa = GTSPLIB / "20kroA100.gtsp.gz"
+    feasible = tmp_path / "feasible.json"
+    feasible.write_text('{"order": [3, 2, 1, 0], "heads": [0, 1, 2, 3]}')
+    bad_bound = tmp_path / "bad-bound.json"
+    bad_bound.write_text('{"order": [3, 2, 1, 0], "heads": [0, 1, 2, 3], "lower_bound": "low"}')
+    high_bound = tmp_path / "high-bound.json"
+    high_bound.write_text('{"order": [3, 2, 1, 0], "heads": [0, 1, 2, 3], "lower_bound": 1e12}')
+    warm = ["solve", str(k4), "-s", "lns", "-t", "1", "--initial"]
     return {
+        "initial infeasible": ([*warm, str(infeasible)],
+                               f"{infeasible}: infeasible solution: cluster 0 is visited 2 times"),
+        "initial missing": ([*warm, str(missing)], f"{missing}: no such file"),
+        "initial bound not a number": ([*warm, str(bad_bound)],
+                                       f"{bad_bound}: 'lower_bound' must be a number or null"),
+        "initial bound above": ([*warm, str(high_bound)], f"{high_bound}: the initial solution's "
+                                "lower bound 1000000000000.0 is above its objective"),
+        "initial for aco": (["solve", str(k4), "-s", "aco", "--initial", str(feasible)],
+                            f"{feasible}: solver 'aco' cannot start from an initial solution"),
         "missing file": (["solve", str(missing), "-s", "greedy"], f"{missing}: no such file"),
         "malformed": (["solve", str(malformed), "-s", "greedy"], f"{malformed}: invalid JSON"),
         "nan": (["solve", str(nan), "-s", "greedy"], f"{nan}: invalid JSON: NaN is not a number"),
@@ -159,7 +175,8 @@ def _bad(tmp_path: Path, k4: Path) -> dict[str, tuple[list[str], str]]:
     "brute too big", "output is a folder", "generate onto a folder", "huge index",
     "huge coordinate", "huge dimension", "negative seed (solve)", "negative seed (generate)",
     "negative seed (train)", "empty .gtsp set", "tour of another instance", "tour not .tour",
-    "plot not .png", "plot infeasible",
+    "plot not .png", "plot infeasible", "initial infeasible", "initial missing",
+    "initial bound not a number", "initial bound above", "initial for aco",
 ])
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, k4, case):
     """Each bad input: exit code 2, one stderr line naming the problem, nothing on stdout."""
@@ -229,6 +246,40 @@ def test_plot_refuses_a_file_of_weights_alone(capsys, tmp_path):
     assert err == (f"gtsp-bench: error: {path}: no node coordinates to draw: the file gives EXPLICIT "
                    "weights without a DISPLAY_DATA_SECTION\n")
     assert list(tmp_path.iterdir()) == []
+def test_solve_json_trajectory_and_progress(capsys, k4):
+    """--json carries the trajectory (objectives never rise, the last is the answer); with
+    --progress each of its points is one stderr line and stdout stays the JSON alone."""
+    code, out, err = run(capsys, "solve", str(k4), "-s", "milp", "--json", "--progress")
+    assert code == 0
+    data = json.loads(out)
+    points = data["trajectory"]
+    assert points and all(list(p) == ["time_s", "objective", "lower_bound"] for p in points)
+    objectives = [p["objective"] for p in points]
+    assert objectives == sorted(objectives, reverse=True) and objectives[-1] == data["objective"]
+    assert points[-1]["lower_bound"] == data["lower_bound"]
+    lines = err.strip().splitlines()
+    assert len(lines) == len(points) and all(line.startswith("gtsp-bench: progress: ") for line in lines)
+    assert f"objective {data['objective']:.6f}" in lines[-1] and lines[-1].endswith(" %")
+
+
+def test_solve_from_an_initial_solution(capsys, k4, tmp_path):
+    """--initial SOL.json warm-starts lns from a file 'solve --json' wrote: the answer is no
+    worse; from an optimal milp answer (its lower bound meets its objective) lns returns that
+    tour at once."""
+    greedy, optimal = tmp_path / "greedy.json", tmp_path / "optimal.json"
+    assert run(capsys, "solve", str(k4), "-s", "greedy", "-o", str(greedy))[0] == 0
+    assert run(capsys, "solve", str(k4), "-s", "milp", "-o", str(optimal))[0] == 0
+    code, out, _ = run(capsys, "solve", str(k4), "-s", "lns", "-t", "0.5", "--initial", str(greedy),
+                       "--json")
+    assert code == 0
+    assert json.loads(out)["objective"] <= json.loads(greedy.read_text())["objective"]
+    code, out, _ = run(capsys, "solve", str(k4), "-s", "lns", "-t", "30", "--initial", str(optimal),
+                       "--json")
+    assert code == 0
+    data, best = json.loads(out), json.loads(optimal.read_text())
+    assert (data["order"], data["heads"], data["objective"]) == (best["order"], best["heads"],
+                                                                 best["objective"])
+    assert data["runtime_s"] < 1.0
 
 
 def test_a_solver_refusing_the_instance_names_the_file(capsys, tmp_path):

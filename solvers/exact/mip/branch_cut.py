@@ -33,7 +33,7 @@ from gtsp_bench.solvers.heuristics import lns_kernels
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Solution
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Columns priced into the root LP per round, per node.
 PRICE_PER_NODE = 2
@@ -140,11 +140,15 @@ class _Search:
         Candidate heads per GTSP cluster (after pruning).
     stats
         Filled with counters and seconds per phase.
+    progress
+        Told the incumbent's cost and the bound whenever either improves (:meth:`report`).
     """
 
     def __init__(self, problem: Problem, backend: Backend, options: MipOptions, deadline: float,
-                 tour: np.ndarray, kept: Sequence[np.ndarray], stats: dict[str, Any]) -> None:
+                 tour: np.ndarray, kept: Sequence[np.ndarray], stats: dict[str, Any],
+                 progress: Progress = no_progress) -> None:
         self.problem, self.options, self.deadline, self.stats = problem, options, deadline, stats
+        self.progress = progress
         self.model = model = build_model(problem, kept)
         stats["nodes"], stats["edges"] = model.n_nodes, len(model.tail)
         self.tour, self.ub = tour, problem.tour_cost(tour)
@@ -156,8 +160,14 @@ class _Search:
         self.codes = np.full(model.n_cols, -1, dtype=np.int8)  # the node in the LP, per model column
         self.pinned = np.zeros(model.n_cols, dtype=bool)  # branched on: never dropped
         self.pseudo = PseudoCosts(model.n_cols)
+        self.report()
 
     # -------------------------------------------------------------- helpers
+    def report(self) -> None:
+        """Tell ``progress`` the incumbent's cost and the bound (at most that cost: reduced-cost
+        fixing may push the bound above an incumbent it has proven optimal)."""
+        self.progress(self.ub, min(self.lb, self.ub))
+
     def left(self) -> float:
         """Seconds left."""
         return self.deadline - time.perf_counter()
@@ -180,6 +190,7 @@ class _Search:
         cost = self.problem.tour_cost(cand)
         if cost < self.ub:
             self.tour, self.ub = cand, cost
+            self.report()
 
     def solve_lp(self, cutoff: float = math.inf, iterations: int | None = None) -> LpResult:
         """One LP solve, timed (at most ``iterations`` simplex iterations if given)."""
@@ -224,6 +235,7 @@ class _Search:
             rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
             self.lb = max(self.lb, bound)
+            self.report()
             bounds.append(self.lb)
             if self.proven or self.left() <= 0 or self._root_flat(bounds):
                 break
@@ -271,7 +283,8 @@ class _Search:
 
         def lazy(v: np.ndarray) -> tuple[sp.csr_array, np.ndarray] | None:
             cuts = subtour_cuts(model, lp.full(v))
-            if cuts is None:
+            if cuts is None:  # a tour: the backend's new incumbent
+                self.progress(self.problem.tour_cost(model.tour(lp.full(v))))
                 return None
             return sp.csr_array(cuts.sparse(model, lp.cols)), cuts.rhs
 
@@ -285,6 +298,7 @@ class _Search:
             self.offer(lp.full(res.values))
         if res.complete:
             self.lb = max(self.lb, self.ub - self.gap)  # nothing better than ub - gap exists
+        self.report()
 
     # -------------------------------------------------------------- own branch and cut
     def branch_and_cut(self) -> None:
@@ -353,6 +367,7 @@ class _Search:
             best_open = min(heap[0].bound if heap else math.inf,
                             node.bound if node is not None else math.inf)
             self.lb = max(self.lb, min(best_open, self.ub - self.gap))
+            self.report()
         self.stats["bc_nodes"] = explored
 
     def _node_loop(self, branched: tuple[int, bool, float, float] | None = None
@@ -490,6 +505,8 @@ def solve_exact(
     *,
     time_limit: float | None = None,
     seed: int = 0,
+    initial: np.ndarray | None = None,
+    progress: Progress = no_progress,
 ) -> Solution:
     """Solve a priced GTSP to proven optimality (or until ``time_limit`` seconds).
 
@@ -505,6 +522,12 @@ def solve_exact(
         Seconds for the whole solve (``None``: no limit).
     seed
         Seed of the upper-bound heuristic.
+    initial
+        A warm start's tour (problem node ids): the first incumbent, instead of the LNS tour
+        (the LNS restarts still run when the root does not prove it optimal).
+    progress
+        Told each better incumbent's cost and each better bound (the first upper bound's LNS
+        included).
 
     Returns
     -------
@@ -530,9 +553,13 @@ def solve_exact(
     if problem.n_clusters <= 3:  # one cyclic order: its optimal heads are the optimum
         tour, cost = optimal_heads(problem, list(range(problem.instance.n_clusters)))
         return result(tour, "optimal", cost)
-    with _Timer(stats, "heuristic_s"):
-        tour = upper_bound_tour(problem, options.lns_trials, seed,
-                                None if time_limit is None else 0.25 * time_limit)
+    if initial is not None:
+        tour = np.asarray(initial, dtype=np.int64)
+        stats["warm_start"] = True
+    else:
+        with _Timer(stats, "heuristic_s"):
+            tour = upper_bound_tour(problem, options.lns_trials, seed,
+                                    None if time_limit is None else 0.25 * time_limit, progress)
     with _Timer(stats, "prune_s"):
         # pruning is exact after any number of passes; at K = 50 (N = 20) a full run took 138 s
         # of a 300 s limit for 11 % of the nodes, so it gets a fifth of the limit at most
@@ -540,7 +567,7 @@ def solve_exact(
         if time_limit is not None:
             prune_by = min(deadline, time.perf_counter() + PRUNE_SHARE * time_limit)
         kept = prune_heads(problem, deadline=prune_by) if options.prune else problem.clusters
-    search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats)
+    search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats, progress)
     paused = search.root(None if time_limit is None else start + ROOT_SHARE * time_limit)
     if not search.proven and search.left() > 0:
         # the root did not finish (or paused at half the limit): LNS restarts for a small share
@@ -553,6 +580,7 @@ def solve_exact(
         if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
             stats["restart_gain"] = search.ub - problem.tour_cost(better)
             search.tour, search.ub = better, problem.tour_cost(better)
+            search.report()
             paused = True
         if paused:
             search.root()
@@ -606,8 +634,12 @@ class MipSolver:
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0,
+        seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
     ) -> Solution:
-        """Solve to proven optimality, or return the best tour and bound at ``time_limit``."""
-        return solve_exact(price(instance, omega), self.backend, self.options,
-                           time_limit=time_limit, seed=seed)
+        """Solve to proven optimality, or return the best tour and bound at ``time_limit``;
+        a warm start (``initial``) is the first incumbent; each better incumbent and bound is
+        reported to ``progress``."""
+        problem = price(instance, omega)
+        tour = None if initial is None else problem.to_tour(initial.order, initial.heads)
+        return solve_exact(problem, self.backend, self.options, time_limit=time_limit, seed=seed,
+                           initial=tour, progress=progress)

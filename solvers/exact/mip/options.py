@@ -13,6 +13,7 @@ from gtsp_bench.solvers.heuristics.local_search import anchor_node, improve
 
 from gtsp_bench.checks import check_bool, check_float, check_int
 from gtsp_bench.problem import Problem
+from gtsp_bench.solver import Progress, no_progress
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,8 @@ class MipOptions:
         check_float("abs_gap", self.abs_gap, 0.0, math.inf, open_low=False)
 
 
-def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None) -> np.ndarray:
+def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None,
+                     progress: Progress = no_progress) -> np.ndarray:
     """A good tour, the search's first upper bound.
 
     Parameters
@@ -67,6 +69,8 @@ def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float
         Seed of the LNS.
     time_limit
         Seconds for the LNS (``None``: no limit).
+    progress
+        Told each better tour's cost the LNS finds.
 
     Returns
     -------
@@ -74,9 +78,12 @@ def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float
         Node ids of the tour, one per GTSP cluster (the depot first when there is one).
     """
     if trials == 0:
-        return improve(problem, greedy_tour(problem, anchor_node(problem)))[0]
+        tour, cost = improve(problem, greedy_tour(problem, anchor_node(problem)))
+        progress(cost)
+        return tour
     lns = Lns(trials=trials, stop_at_convergence=True)  # its trials, not the whole time limit
-    sol = lns.solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed)
+    sol = lns.solve(problem.instance, problem.omega, time_limit=time_limit, seed=seed,
+                    progress=progress)
     return problem.to_tour(sol.order, sol.heads)
 
 
