@@ -273,7 +273,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             tuple(run(s) for s in _HEURISTICS),
             budget=Budget(10.0),
             reference=Reference(exact=(("dp", 10), ("milp", None))),
-            outputs=("profile",),
+            outputs=("profile", "anytime"),
             rough_time="40 min",
             quick={
                 "sources": (
@@ -300,7 +300,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             ),
             tuple(run(s) for s in _PEERS_TABLE),
             budget=Budget(10.0),
-            outputs=("profile", "doc-heuristics"),
+            outputs=("profile", "anytime", "doc-heuristics"),
             rough_time="30 min",
             quick={
                 "sources": (Gtsplib(("11berlin52", "20kroA100")), Committed(("uav-K20-N20-s1",), 1)),
@@ -342,6 +342,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             (run("lns"),),
             seeds=(1,),
             budget=Budget(60.0),
+            outputs=("anytime",),
             jobs=1,
             rough_time="45 min",
             quick={"sources": (Gtsplib(("235pcb1173",)),), "budget": Budget(10.0)},
@@ -392,7 +393,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             (Committed(_LARGE_UAV, 10),),
             tuple(run(s) for s in ("greedy", "aco", "drl", "am", "local", "lns")),
             budget=Budget(10.0),
-            outputs=("profile", "gap-k"),
+            outputs=("profile", "gap-k", "anytime"),
             rough_time="35 min",
             quick={"sources": (Committed(("uav-K20-N20-s1", "uav-K50-N20-s1"), 1),), "budget": Budget(2.0)},
         ),

@@ -59,6 +59,16 @@ def _gap_k(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say
     return [out_dir / "gap-k.csv", out_dir / "gap-k.png"]
 
 
+def _anytime(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
+    from gtsp_bench.report import profiles
+    from gtsp_bench.report.figures import save_png
+
+    table = profiles.anytime_table(df)
+    atomic_write_text(out_dir / "anytime.csv", table.to_csv(index=False, float_format="%.10g"))
+    save_png(profiles.time_to_target_figure(df), out_dir / "time-to-target.png")
+    return [out_dir / "anytime.csv", out_dir / "time-to-target.png"]
+
+
 # ---------------------------------------------------------------------- tables for the docs
 def gap_time_cell(rows: pd.DataFrame, ms: bool = False) -> str:
     """Mean gap and median time of the answered solves (``*``: a solve stopped at its limit;
@@ -136,6 +146,22 @@ def heuristics_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> s
     )
 
 
+def anytime_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
+    """The primal integrals and times to target: a line per group, a column per solver."""
+
+    def cell(g: pd.DataFrame) -> str:
+        reached = g["time_to_1pct_s"].notna().sum()
+        return f"{g['primal_integral'].mean():.3f} ({reached}/{len(g)})"
+
+    return (
+        f"{_made_by(bench, df, command)}\n\n"
+        f"{pivot_markdown(df, 'set', 'label', cell, 'group')}\n\n"
+        "Cells: mean primal integral (Berthold 2013; the primal gap over the time limit, divided by "
+        "it: 0 is the reference at once, 1 nothing in time) and how many solves came within 1 % of "
+        "the reference. The times to target are in the figure below and in the rows."
+    )
+
+
 def learned_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The learned page's table: a line per policy, a column per K (both omegas)."""
     return (
@@ -176,6 +202,22 @@ DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
 }
 
 
+def _ttt_figure(df: pd.DataFrame) -> Any:
+    from gtsp_bench.report.profiles import time_to_target_figure
+
+    return time_to_target_figure(df)
+
+
+#: More blocks of the same page an output refreshes: output -> ((block, renderer), ...).
+EXTRA_BLOCKS: dict[str, tuple[tuple[str, Callable[..., str]], ...]] = {
+    "doc-heuristics": (("heuristics-anytime", anytime_block),),
+}
+#: Figures an output writes into the docs: output -> ((path in the checkout, maker), ...).
+DOC_FIGURES: dict[str, tuple[tuple[str, Callable[[pd.DataFrame], Any]], ...]] = {
+    "doc-heuristics": (("docs/img/heuristics-time-to-target.png", _ttt_figure),),
+}
+
+
 def committed_root(bench: Benchmark, out_dir: Path) -> Path | None:
     """The checkout whose ``results/NAME`` is ``out_dir`` (it holds ``mkdocs.yml``), else None."""
     out = out_dir.resolve()
@@ -198,7 +240,15 @@ def _doc(name: str) -> Output:
             say(f"warning: {path}: no such page; its table was not refreshed")
             return []
         refresh_blocks(path, {block: renderer(bench, df, run_command(out_dir))}, [block])
-        return [path]
+        written = [path]
+        for extra_block, extra in EXTRA_BLOCKS.get(name, ()):
+            refresh_blocks(path, {extra_block: extra(bench, df, run_command(out_dir))}, [extra_block])
+        for figure, make in DOC_FIGURES.get(name, ()):
+            from gtsp_bench.report.figures import save_png
+
+            save_png(make(df), root / figure)
+            written.append(root / figure)
+        return written
 
     return write
 
@@ -326,6 +376,7 @@ def _nothing(*_: Any) -> list[Path]:
 
 OUTPUTS: dict[str, Output] = {
     "profile": _profile,
+    "anytime": _anytime,
     "gap-k": _gap_k,
     "glns": _glns,
     "update-references": _update_references,

@@ -4,7 +4,9 @@ A row is one solve (:data:`COLUMNS`). ``gap_pct`` is always to the *reference* (
 ``reference_kind``: ``optimal`` a proven optimum, ``best_known`` a published or committed best
 tour, ``best_found`` the best this run found) and ``bound_gap_pct`` always to the solver's *own*
 lower bound (``(objective - lower_bound) / objective``), so the two cannot be mixed up. Every row
-keeps its tour (``order`` and ``heads``, space-separated), so anyone can re-price it.
+keeps its tour (``order`` and ``heads``, space-separated), so anyone can re-price it, and its
+incumbents over time (``trajectory``) with the anytime metrics they give against the reference
+(``primal_integral``, ``time_to_1pct_s``, ``time_to_0p1pct_s``: :mod:`gtsp_bench.bench.anytime`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from typing import Any
 
 import pandas as pd
 
+from gtsp_bench.bench.anytime import format_trajectory, metrics, points_of
 from gtsp_bench.bench.definitions import Reference, Run
 from gtsp_bench.bench.sources import Entry
 
@@ -44,6 +47,10 @@ COLUMNS = (
     "order",
     "heads",
     "note",
+    "trajectory",
+    "primal_integral",
+    "time_to_1pct_s",
+    "time_to_0p1pct_s",
 )
 REFERENCE_KINDS = ("optimal", "best_known", "best_found")
 #: A gap at most this (percent) is a hit of the reference.
@@ -166,6 +173,10 @@ def make_rows(
         bound_gap = (
             100.0 * (obj - lb) / abs(obj) if math.isfinite(obj) and math.isfinite(lb) and obj else math.nan
         )
+        runtime = _num(rec.get("runtime_s"))
+        points = points_of(rec.get("trajectory"), runtime, obj)
+        horizon = c.time_limit if c.time_limit else runtime
+        anytime = metrics(points, ref.value if ref else math.nan, horizon)
         rows.append(
             {
                 "benchmark": benchmark,
@@ -182,7 +193,7 @@ def make_rows(
                 "status": rec.get("status"),
                 "objective": obj,
                 "lower_bound": lb,
-                "runtime_s": _num(rec.get("runtime_s")),
+                "runtime_s": runtime,
                 "reference_value": ref.value if ref else math.nan,
                 "reference_kind": ref.kind if ref else "",
                 "reference_source": ref.source if ref else "",
@@ -191,6 +202,8 @@ def make_rows(
                 "order": " ".join(map(str, rec.get("order") or [])),
                 "heads": " ".join(map(str, rec.get("heads") or [])),
                 "note": "; ".join(notes),
+                "trajectory": format_trajectory(points),
+                **anytime,
             }
         )
     return pd.DataFrame(rows, columns=list(COLUMNS))
@@ -269,13 +282,14 @@ def read_rows(path: Any) -> pd.DataFrame:
     from gtsp_bench.errors import InputError
 
     try:
-        df = pd.read_csv(path, keep_default_na=True, dtype={"order": str, "heads": str, "note": str})
+        df = pd.read_csv(path, keep_default_na=True,
+                         dtype={"order": str, "heads": str, "note": str, "trajectory": str})
     except (OSError, ValueError) as e:
         raise InputError(f"{path}: cannot read the rows ({e})") from None
     missing = [c for c in COLUMNS if c not in df.columns]
     if missing:
         raise InputError(f"{path}: not a rows.csv of a benchmark (no column {missing[0]!r})")
-    for col in ("order", "heads", "note", "reference_kind", "reference_source", "label", "set"):
+    for col in ("order", "heads", "note", "reference_kind", "reference_source", "label", "set", "trajectory"):
         df[col] = df[col].fillna("")
     return df
 

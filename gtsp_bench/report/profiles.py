@@ -171,3 +171,49 @@ def gap_time_figure(df: pd.DataFrame) -> Any:
     fig, ax = _figure((6, 4.2))
     plot_gap_time(df, ax=ax)
     return fig
+
+
+# ---------------------------------------------------------------------- anytime
+def anytime_table(df: pd.DataFrame) -> pd.DataFrame:
+    """Per set and solver (``label``): solves, mean primal integral, the share of solves that
+    reached 1 % and 0.1 % of the reference and their median time to get there."""
+    out = []
+    for (set_name, label), g in df.groupby(["set", "label"], sort=False):
+        row = {"set": set_name, "solver": label, "solves": len(g),
+               "mean_primal_integral": g["primal_integral"].mean()}
+        for col, name in (("time_to_1pct_s", "1pct"), ("time_to_0p1pct_s", "0p1pct")):
+            reached = g[col].dropna()
+            row[f"reached_{name}"] = len(reached) / len(g) if len(g) else np.nan
+            row[f"median_s_to_{name}"] = reached.median() if len(reached) else np.nan
+        out.append(row)
+    return pd.DataFrame(out)
+
+
+def plot_time_to_target(df: pd.DataFrame, ax: Any = None) -> Any:
+    """COCO-style ECDF of times to target: for each solver (``label``), the share of (solve,
+    target) pairs, targets 1 % and 0.1 % of the reference, reached by each time (log scale)."""
+    ax = _axes(ax)
+    pairs = df.melt(id_vars=["label"], value_vars=["time_to_1pct_s", "time_to_0p1pct_s"], value_name="t")
+    positive = pairs["t"][pairs["t"] > 0]
+    low = float(positive.min()) if len(positive) else 1e-3
+    high = float(df["time_limit"].max()) if df["time_limit"].notna().any() else float(pairs["t"].max() or 1.0)
+    for i, (label, g) in enumerate(pairs.groupby("label", sort=False)):
+        times = np.sort(np.maximum(g["t"].dropna().to_numpy(), low))
+        x = np.concatenate([[low], times, [max(high, low)]])
+        y = np.concatenate([[0.0], np.arange(1, len(times) + 1) / len(g), [len(times) / len(g)]])
+        ax.step(x, y, where="post", label=label, marker=_MARKERS[i % len(_MARKERS)], markevery=[-1])
+    ax.set_xscale("log")
+    ax.set_xlabel("seconds")
+    ax.set_ylabel("share of (solve, target) pairs reached")
+    ax.set_ylim(0, 1.02)
+    ax.set_title("time to 1 % and 0.1 % of the reference")
+    ax.legend(fontsize="small")
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def time_to_target_figure(df: pd.DataFrame) -> Any:
+    """The time-to-target ECDF on a figure of its own."""
+    fig, ax = _figure((7.0, 4.5))
+    plot_time_to_target(df, ax)
+    return fig

@@ -1,0 +1,111 @@
+"""The row schema and the reference rule: proven optima of exact tasks, the set's table, a
+benchmark's own proofs, the best found; tours below a proven optimum and disagreeing proofs are
+errors; a best known value beaten becomes the best found."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from gtsp_bench.bench.definitions import Reference, Run
+from gtsp_bench.bench.outputs import errors_of
+from gtsp_bench.bench.rows import (
+    BELOW_OPTIMUM,
+    BETTER_THAN_BEST_KNOWN,
+    COLUMNS,
+    Cell,
+    make_rows,
+    references,
+    summary_table,
+)
+from gtsp_bench.bench.sources import Entry
+from gtsp_bench.bench.tasks import StoredInstance, fingerprint
+from gtsp_bench.data.parse import format_json_instance
+from gtsp_bench.data.sets import ReferenceRow
+from gtsp_bench.generator import generate_instance
+
+INST = generate_instance(3, 4, seed=1, name="t3")
+TEXT = format_json_instance(INST)
+
+
+def _entry(table: dict | None = None) -> Entry:
+    stored = StoredInstance(INST, TEXT, fingerprint(TEXT), __import__("pathlib").Path("t3.json"))
+    return Entry("set", "t3", stored, table or {})
+
+
+def _rec(obj: float | None, status: str = "feasible", lb: float | None = None) -> dict:
+    if obj is None:
+        return {"status": "failed", "objective": None, "note": "boom"}
+    return {"status": status, "objective": obj, "lower_bound": lb, "runtime_s": 0.5,
+            "order": [0, 1, 2], "heads": [0, 0, 0], "trajectory": [[0.1, obj * 1.1, None], [0.5, obj, lb]]}
+
+
+def _cells(entry: Entry, *solvers: str) -> list[Cell]:
+    return [Cell(entry, Run(s), 0.5, 0, 10.0, f"k-{s}") for s in solvers]
+
+
+def test_an_exact_tasks_proof_is_the_reference_and_gaps_are_to_it():
+    """The exact task's optimum wins over the table; gap_pct to it, bound_gap_pct to the row's
+    own bound; the schema's columns in order; the tour and trajectory kept."""
+    e = _entry({0.5: ReferenceRow("t3", 0.5, 90.0, None, "best_known", "old", "")})
+    cells = _cells(e, "a", "b")
+    records = {"k-a": _rec(105.0, lb=100.0), "k-b": _rec(100.0), "k-dp": _rec(100.0, "optimal")}
+    refs = references(Reference(exact=(("dp", None),)), cells, records, {("set", "t3", 0.5): ("k-dp", "dp")})
+    df = make_rows("b", cells, records, refs)
+    assert tuple(df.columns) == COLUMNS
+    a = df.set_index("solver").loc["a"]
+    assert a["reference_kind"] == "optimal" and a["reference_source"] == "dp (proven)"
+    assert math.isclose(a["gap_pct"], 5.0) and math.isclose(a["bound_gap_pct"], 100 * 5 / 105)
+    assert a["order"] == "0 1 2" and a["heads"] == "0 0 0" and a["trajectory"].count(":") == 3
+    assert 0 < a["primal_integral"] < 1 and a["time_to_1pct_s"] != a["time_to_1pct_s"]  # NaN: never
+    assert df.set_index("solver").loc["b", "time_to_0p1pct_s"] == 0.5
+
+
+def test_the_table_then_own_proofs_then_the_best_found():
+    """No exact task: the set's row; without one, a proof of the benchmark's own solves (with
+    own_proofs); without either, the best objective found, labelled best_found."""
+    table = {0.5: ReferenceRow("t3", 0.5, 99.0, 98.0, "optimal", "milp 60s", "2026-11-27")}
+    records = {"k-a": _rec(99.0), "k-b": _rec(101.0, "optimal")}
+    by_table = references(Reference(), _cells(_entry(table), "a", "b"), records, {})
+    assert by_table[("set", "t3", 0.5)].value == 99.0 and by_table[("set", "t3", 0.5)].kind == "optimal"
+    proofs = references(Reference(table=False, own_proofs=True), _cells(_entry(), "a", "b"), records, {})
+    assert proofs[("set", "t3", 0.5)].value == 101.0 and proofs[("set", "t3", 0.5)].source == "b (proven)"
+    best = references(Reference(table=False), _cells(_entry(), "a", "b"), records, {})
+    assert best[("set", "t3", 0.5)].kind == "best_found" and best[("set", "t3", 0.5)].value == 99.0
+
+
+def test_a_beaten_best_known_becomes_best_found_and_the_row_says_so():
+    """A solve below a best_known value: the reference is the best found, and the row notes it."""
+    e = _entry({0.5: ReferenceRow("t3", 0.5, 100.0, None, "best_known", "GLKH", "")})
+    cells = _cells(e, "a")
+    records = {"k-a": _rec(95.0)}
+    refs = references(Reference(), cells, records, {})
+    table = references(Reference(), cells, {}, {})
+    df = make_rows("b", cells, records, refs, table)
+    row = df.iloc[0]
+    assert row["reference_kind"] == "best_found" and row["gap_pct"] == 0.0
+    assert BETTER_THAN_BEST_KNOWN in row["note"]
+
+
+def test_below_a_proven_optimum_and_disagreeing_proofs_are_errors():
+    """A tour below the reference optimum is noted and an error; two proofs that differ are one."""
+    e = _entry({0.5: ReferenceRow("t3", 0.5, 100.0, None, "optimal", "dp", "")})
+    cells = _cells(e, "a", "b", "c")
+    records = {"k-a": _rec(90.0), "k-b": _rec(100.0, "optimal"), "k-c": _rec(101.0, "optimal")}
+    df = make_rows("b", cells, records, references(Reference(), cells, records, {}))
+    assert BELOW_OPTIMUM in df.set_index("solver").loc["a", "note"]
+    errors = errors_of(df)
+    assert any("below the proven optimum" in e for e in errors)
+    assert any("proven optima disagree" in e for e in errors)
+
+
+def test_summary_counts_hits_proofs_failures():
+    """The summary per set and label: solves, hits, proven and failed counts."""
+    cells = _cells(_entry(), "a", "b", "c")
+    records = {"k-a": _rec(100.0, "optimal"), "k-b": _rec(110.0), "k-c": _rec(None)}
+    df = make_rows("b", cells, records, references(Reference(own_proofs=True), cells, records, {}))
+    s = summary_table(df).set_index("label")
+    assert s.loc["a", "hits"] == 1 and s.loc["a", "proven"] == 1
+    assert math.isclose(s.loc["b", "mean_gap_pct"], 10.0) and s.loc["b", "hits"] == 0
+    assert s.loc["c", "failed"] == 1 and pd.isna(s.loc["c", "mean_gap_pct"])
