@@ -11,8 +11,7 @@ from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.registry import run_solver
-
-from .conftest import GTSPLIB
+from tests.conftest import GTSPLIB
 
 
 def _mixed(seed: int, depot: bool) -> tuple[Instance, float]:

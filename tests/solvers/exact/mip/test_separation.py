@@ -9,7 +9,7 @@ from gtsp_bench.solvers.exact.mip import branch_cut, separation
 from gtsp_bench.solvers.exact.mip.model import GtspModel
 from gtsp_bench.solvers.exact.mip.separation import Cuts, subtour_cuts
 
-from .test_mip_model import _all_tours, _model, _random_tour, _vector
+from .test_model import _all_tours, _model, _random_tour, _vector
 
 SEPARATORS = ("node_cluster_cuts", "flow_cuts", "blossom_cuts", "subtour_cuts")
 

@@ -10,9 +10,8 @@ from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.registry import get_solver, run_solver
-
-from .conftest import GTSPLIB
-from .tiny_cases import tiny_case
+from tests.conftest import GTSPLIB
+from tests.tiny_cases import tiny_case
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -14,9 +14,8 @@ from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
-
-from .conftest import GTSPLIB
-from .tiny_cases import tiny_case
+from tests.conftest import GTSPLIB
+from tests.tiny_cases import tiny_case
 
 pytest.importorskip("pyvrp")
 

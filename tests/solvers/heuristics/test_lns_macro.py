@@ -24,8 +24,7 @@ from scipy.spatial.distance import cdist
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.problem import price
-
-from .conftest import GTSPLIB
+from tests.conftest import GTSPLIB
 
 
 def _length(points: np.ndarray, order: np.ndarray) -> float:

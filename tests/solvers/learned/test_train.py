@@ -20,8 +20,7 @@ from gtsp_bench.solvers.learned.train import Trainer, output_paths, policy_confi
 
 from gtsp_bench.cli import main  # noqa: E402
 from gtsp_bench.errors import InputError  # noqa: E402
-
-from .conftest import REPO  # noqa: E402
+from tests.conftest import REPO  # noqa: E402
 
 
 def _cfg(model: str = "drl", steps: int = 6, **kw) -> TrainConfig:

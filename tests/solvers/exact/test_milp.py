@@ -18,8 +18,7 @@ from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.registry import get_solver, run_solver
-
-from .conftest import GTSPLIB, REPO
+from tests.conftest import GTSPLIB, REPO
 
 
 def _instance(seed: int, k: int, sizes: list[int], depot: bool) -> Instance:

@@ -17,9 +17,8 @@ from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import get_solver, run_solver
-
-from .conftest import GTSPLIB
-from .tiny_cases import tiny_asymmetric_case, tiny_case
+from tests.conftest import GTSPLIB
+from tests.tiny_cases import tiny_asymmetric_case, tiny_case
 
 #: lns that stops when its trials are done instead of using the whole time limit.
 CONVERGE = {"stop_at_convergence": True}

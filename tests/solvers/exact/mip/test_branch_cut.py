@@ -17,9 +17,8 @@ from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
-
-from .conftest import GTSPLIB
-from .test_milp import _instance
+from tests.conftest import GTSPLIB
+from tests.solvers.exact.test_milp import _instance
 
 
 def test_asymmetric_costs_are_refused():

@@ -15,8 +15,7 @@ from gtsp_bench.solvers.learned.local import LocalPolicy
 from gtsp_bench.solvers.learned.policies import POLICIES, build_policy, get_policy
 
 from gtsp_bench.errors import InputError
-
-from .conftest import REPO
+from tests.conftest import REPO
 
 LEARNED = REPO / "solvers" / "learned"
 PACKAGE = "gtsp_bench.solvers.learned"

@@ -11,9 +11,8 @@ from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
-
-from .conftest import GTSPLIB
-from .tiny_cases import tiny_case
+from tests.conftest import GTSPLIB
+from tests.tiny_cases import tiny_case
 
 
 def _random_tour(problem, rng):

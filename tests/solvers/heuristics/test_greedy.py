@@ -9,8 +9,7 @@ from gtsp_bench.data.io import read_instance
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.registry import run_solver
-
-from .conftest import GTSPLIB
+from tests.conftest import GTSPLIB
 
 
 def test_hand_traced_greedy():

@@ -1,0 +1,1 @@
+"""Tests of gtsp_bench.solvers.peers."""
