@@ -1,4 +1,5 @@
-"""Performance profiles and gap plots of a sweep's tidy table (:mod:`gtsp_bench.bench.sweep`).
+"""Performance profiles, gap plots and time-to-target curves of a benchmark's rows
+(:mod:`gtsp_bench.bench.rows`).
 
 A performance profile (E. D. Dolan and J. J. More, "Benchmarking optimization software with
 performance profiles", Mathematical Programming 91, 2002) compares solvers over a set of problems:

@@ -10,7 +10,7 @@ g = sum a e, logits = v_g tanh(W3 e + W4 g), clipped to C_L tanh(.) with C_L = 1
 elements masked. The paper's u_k runs over every element; with ``glimpse="unvisited"`` (how
 ``gtsp-bench train`` and the shipped checkpoint train it) visited elements are masked in the
 glimpse too, so g summarises what is left to visit, which the LSTM state alone must otherwise
-track: a policy trained on K = 4 then generalises much better to K = 10 (`gtsp-bench bench --suite learned`).
+track: a policy trained on K = 4 then generalises much better to K = 10 (`gtsp-bench bench learned`).
 Beyond the paper's equations, ``local`` adds to each pointer logit a learned term of K-free
 numbers read from the UAV's location (the paper's state includes it; ``energy`` adds the rule's
 next step into each cluster), and ``damp`` weights the pointer's own logits by

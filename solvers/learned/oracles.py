@@ -2,8 +2,7 @@
 
 :func:`exact_by_enumeration` is the optimum (every order, optimal heads): the trainer's
 validation gap for K <= 6. :func:`paper_rule_optimum` is the best any visiting order reaches
-when heads follow the paper's rule: the bound the learned suite (``gtsp-bench bench --suite
-learned``) reports for policies that keep that rule.
+when heads follow the paper's rule: no policy that keeps that rule can do better.
 """
 
 from __future__ import annotations
