@@ -208,7 +208,7 @@ def plan(bench: Benchmark, settings: Settings) -> Plan:
             for r in runs:
                 if r.max_k is not None and e.k > r.max_k:
                     continue
-                for seed in bench.seeds:
+                for seed in bench.seeds[:1] if r.one_seed else bench.seeds:
                     cells.append(Cell(e, r, w, seed, tl, add(e, r.solver, r.options, w, seed, tl)))
             ref = next(
                 (s for s, k in bench.reference.exact if s in registered and (k is None or e.k <= k)), None
