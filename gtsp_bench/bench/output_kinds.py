@@ -311,7 +311,7 @@ def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
     ok = df[df["objective"].notna()]
     omega = ok["omega"].astype(float).fillna(-1.0)
     for (s, inst, w), g in ok.groupby(["set", "instance", omega], sort=False):
-        best = g.loc[g["objective"].idxmin()]
+        best = g.iloc[int(g["objective"].to_numpy().argmin())]
         proven = bool((g["status"] == "optimal").any())
         lower = g["lower_bound"].max()
         source = f"{best['label']} {best['time_limit']:g}s" + (

@@ -1,0 +1,84 @@
+"""What a run writes: the manifest's provenance, the summary, GLNS's table, the doc blocks and
+the sets' reference.csv from the rows."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+
+import pandas as pd
+
+from gtsp_bench.bench.definitions import BENCHMARKS
+from gtsp_bench.bench.output_kinds import DOC_BLOCKS, glns_lines, new_references, pivot_markdown, proof_cell
+from gtsp_bench.bench.outputs import manifest, write_core
+from gtsp_bench.bench.rows import COLUMNS
+from tests.conftest import REPO
+
+
+def _rows(**over) -> pd.DataFrame:
+    base = {c: "" for c in COLUMNS}
+    base.update(benchmark="b", set="s", instance="i1", K=3, N=4, omega=0.5, solver="lns", label="lns",
+                seed=0, time_limit=1.0, status="feasible", objective=100.0, lower_bound=math.nan,
+                runtime_s=0.5, reference_value=100.0, reference_kind="optimal", gap_pct=0.0,
+                bound_gap_pct=math.nan, primal_integral=0.1, time_to_1pct_s=0.2, time_to_0p1pct_s=0.3)
+    base.update(over)
+    return pd.DataFrame([base], columns=list(COLUMNS))
+
+
+def test_the_manifest_names_commit_machine_command_and_instance_hashes(tmp_path):
+    """The three files are written; the manifest holds the provenance the docs promise."""
+    bench = BENCHMARKS["heuristics"]
+    text = "abc"
+    sha = hashlib.sha256(text.encode()).hexdigest()
+    written, summary = write_core(tmp_path, bench, _rows(), "gtsp-bench bench heuristics", {"x.json": sha},
+                                  {"tasks": 1})
+    assert [p.name for p in written] == ["rows.csv", "summary.md", "manifest.json"]
+    m = json.loads((tmp_path / "manifest.json").read_text())
+    assert m["command"] == "gtsp-bench bench heuristics" and m["instances"] == {"x.json": sha}
+    assert m["git_commit"] and isinstance(m["git_dirty"], bool) and m["cores"] >= 1
+    assert m["budget_rule"] == "10 s per solve" and "dp" in m["reference_rule"]
+    assert m["packages"]["numpy"] and m["tasks"] == 1
+    assert "| s | lns | 1 | optimal | 0.000 |" in summary
+    assert manifest(bench, "", {}, {})["command"].startswith("gtsp-bench")
+
+
+def test_glns_table_puts_lns_beside_glns_and_the_targets():
+    """One line per instance with GLNS's published columns, then the three target lines."""
+    df = pd.concat([_rows(instance="31pr152", seed=s, gap_pct=g) for s, g in ((1, 0.0), (2, 0.5))])
+    lines = glns_lines(df)
+    line = next(x for x in lines if x.startswith("| 31pr152 |"))
+    assert "| 0.2500 | 1/2 | 0.500 |" in line and "/10 |" in line
+    assert "- instances at the best known at least once: 1 of 1" in lines
+
+
+def test_new_references_keep_the_best_tour_its_proof_and_bound():
+    """Per point: the best objective, optimal when some solve proved it, the best bound."""
+    df = pd.concat([_rows(objective=101.0, lower_bound=99.0, label="lns", seed=2),
+                    _rows(objective=100.0, status="optimal", lower_bound=100.0, label="milp", solver="milp")])
+    (row,) = new_references(df, "2026-11-27")["s"]
+    assert (row.instance, row.omega, row.value, row.status, row.lower_bound) == ("i1", 0.5, 100.0, "optimal", 100.0)
+    assert row.source == "milp 1s" and row.date == "2026-11-27"
+
+
+def test_doc_tables_are_pivots_of_the_rows():
+    """A line per row value, a column per solver, a cell from the rows of both."""
+    df = pd.concat([_rows(status="optimal"), _rows(label="milp", status="time_limit", bound_gap_pct=0.5)])
+    text = pivot_markdown(df, "set", "label", proof_cell, "set")
+    assert text.splitlines()[0] == "| set | lns | milp |"
+    assert "1/1 proven" in text and "0/1 proven, 0.50s, bound gap <= 0.500%" in text
+
+
+def test_committed_doc_blocks_are_what_their_rows_give():
+    """Each generated doc table is exactly its renderer's output on the committed rows.csv."""
+    from gtsp_bench.bench.output_kinds import run_command
+    from gtsp_bench.bench.rows import read_rows
+
+    for name, (page, block, renderer) in DOC_BLOCKS.items():
+        bench = next(b for b in BENCHMARKS.values() if name in b.outputs)
+        rows = REPO / "results" / bench.name / "rows.csv"
+        if not rows.is_file():
+            continue
+        text = (REPO / page).read_text()
+        want = renderer(bench, read_rows(rows), run_command(rows.parent))
+        assert f"<!-- BEGIN generated:{block} -->\n{want}\n<!-- END generated:{block} -->" in text, name
