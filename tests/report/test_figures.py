@@ -13,7 +13,7 @@ from gtsp_bench.report.figures import experiment_figure, save_png, tour_figure, 
 from tests.conftest import REPO
 
 matplotlib.use("Agg")
-RESULTS = REPO / "results"
+RESULTS = REPO / "results" / "paper"
 
 
 def _table(name: str) -> pd.DataFrame:
