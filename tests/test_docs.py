@@ -1,5 +1,6 @@
 """The documentation: the site builds with --strict, every relative link (and anchor) resolves,
-and the tables of results in the docs are the ones the report code generates from results/*.csv."""
+and the tables of results in the docs are the ones the code generates from the committed results
+(results/paper/*.csv for the paper's blocks, results/NAME/rows.csv for a benchmark's)."""
 
 from __future__ import annotations
 
@@ -11,11 +12,23 @@ from pathlib import Path
 
 import pytest
 
+from gtsp_bench.bench.definitions import BENCHMARKS
+from gtsp_bench.bench.output_kinds import DOC_BLOCKS, EXTRA_BLOCKS, run_command
+from gtsp_bench.bench.rows import read_rows
+from gtsp_bench.report.listing import BLOCK as LISTING_BLOCK
 from gtsp_bench.report.paper import DOCS_BLOCKS, docs_dir_for, report_blocks
 
 from .conftest import REPO
 
-PAGES = [REPO / "README.md", REPO / "results" / "README.md", *sorted((REPO / "docs").rglob("*.md"))]
+PAGES = [
+    REPO / "README.md",
+    REPO / "results" / "README.md",
+    REPO / "results" / "paper" / "README.md",
+    *sorted((REPO / "instances").glob("*/README.md")),
+    *sorted((REPO / "docs").rglob("*.md")),
+]
+#: The body of a generated block whose benchmark's rows are not committed yet.
+NOT_RUN = "(not run)"
 _FENCE = re.compile(r"^```.*?^```", flags=re.S | re.M)
 _CODE = re.compile(r"`[^`\n]*`")
 _LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
@@ -81,22 +94,66 @@ def test_link_checker_finds_broken_links(tmp_path):
     assert "title-x" in _anchors(page) and "nope" not in _anchors(page)
 
 
+def _benchmark_blocks() -> dict[str, str]:
+    """Each benchmark's documentation block by name (its doc-* output's block and the extra ones):
+    what its renderer makes of the committed ``results/NAME/rows.csv``, or ``(not run)`` while that
+    file is not committed."""
+    out = {}
+    for output, (_, block, renderer) in DOC_BLOCKS.items():
+        (bench,) = [b for b in BENCHMARKS.values() if output in b.outputs]
+        folder = REPO / bench.output_dir
+        rows = read_rows(folder / "rows.csv") if (folder / "rows.csv").is_file() else None
+        for name, make in ((block, renderer), *EXTRA_BLOCKS.get(output, ())):
+            out[name] = NOT_RUN if rows is None else make(bench, rows, run_command(folder))
+    return out
+
+
 def test_docs_tables_are_generated_from_the_committed_results():
-    """Each generated block of a docs page is exactly what the report code makes of results/*.csv,
-    and a run into results/ refreshes the docs (mkdocs.yml beside it)."""
-    assert docs_dir_for(REPO / "results") == REPO / "docs"
+    """Each generated block of a docs page is exactly what the code makes of the committed results:
+    the paper's blocks from results/paper/*.csv (and a run into results/paper refreshes the docs,
+    mkdocs.yml being beside results/), a benchmark's block from its results/NAME/rows.csv."""
+    assert docs_dir_for(REPO / "results" / "paper") == REPO / "docs"
     assert docs_dir_for(REPO / "results" / "quick") is None
-    blocks = report_blocks(REPO / "results", REPO / "solvers" / "learned" / "checkpoints")
-    found = 0
+    paper = report_blocks(REPO / "results" / "paper", REPO / "solvers" / "learned" / "checkpoints")
+    benchmarks = _benchmark_blocks()
+    found: dict[str, int] = {}
     for page in sorted((REPO / "docs").rglob("*.md")):
         for name, body in _BLOCK.findall(page.read_text(encoding="utf-8")):
-            if name == "heuristics-table":  # made by make bench-heuristics-table (its own test)
+            found[name] = found.get(name, 0) + 1
+            if name == LISTING_BLOCK:  # the table of benchmarks: tests/report/test_listing.py
                 continue
-            assert name in DOCS_BLOCKS, f"{page.name}: block {name!r} is not a docs block"
-            assert body == blocks[name], f"{page.name}: block {name!r} is stale; run " \
-                "gtsp-bench bench --report-only"
-            found += 1
-    assert found >= 1
+            if name in benchmarks:
+                want, how = benchmarks[name], "gtsp-bench bench NAME --report-only"
+            else:
+                assert name in DOCS_BLOCKS, f"{page.name}: block {name!r} is not a docs block"
+                want, how = paper[name], "gtsp-bench bench paper --report-only"
+            assert body == want, f"{page.name}: block {name!r} is stale; run {how}"
+    assert found.get("summary", 0) >= 1
+    for name in benchmarks:  # each benchmark's block is on its page, once
+        assert found.get(name) == 1, f"block {name!r} is on {found.get(name, 0)} pages"
+
+
+def test_docs_blocks_are_on_the_pages_their_outputs_name():
+    """Every doc-* output names a page that holds its blocks, so a run into results/NAME refreshes
+    them (a block on another page would never be refreshed)."""
+    for output, (page, block, _) in DOC_BLOCKS.items():
+        text = (REPO / page).read_text(encoding="utf-8")
+        for name in (block, *(b for b, _ in EXTRA_BLOCKS.get(output, ()))):
+            assert f"<!-- BEGIN generated:{name} -->" in text, f"{page} lacks the block {name} of {output}"
+
+
+def test_results_index_names_every_committed_benchmark():
+    """results/README.md has a line for each benchmark `make bench-all` regenerates (BENCH_ALL in the
+    Makefile), naming its folder and its make target."""
+    makefile = (REPO / "Makefile").read_text(encoding="utf-8")
+    (line,) = re.findall(r"^BENCH_ALL\s*=\s*(.+)$", makefile, flags=re.M)
+    names = line.split()
+    index = (REPO / "results" / "README.md").read_text(encoding="utf-8")
+    assert "paper" in names and len(names) >= 2
+    for name in names:
+        assert f"`{name}/`" in index, f"results/README.md: no line for {name}"
+        target = "make bench" if name == "paper" else f"make bench-{name}"
+        assert f"`{target}`" in index, f"results/README.md: no {target} for {name}"
 
 
 #: The folder beside the checkout that development machines have and users do not (spelt in
