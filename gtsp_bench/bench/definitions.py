@@ -161,17 +161,17 @@ class Reference:
     own_proofs: bool = False
 
     def describe(self) -> str:
-        """The rule in words."""
+        """The rule in words, in the order :func:`gtsp_bench.bench.rows.references` applies it."""
         parts = []
         if self.exact:
             parts.append(
                 "proven optimum of "
                 + ", then ".join(f"{s}" + (f" (K <= {k})" if k else "") for s, k in self.exact)
             )
-        if self.own_proofs:
-            parts.append("a proven optimum of the benchmark's own solves")
         if self.table:
             parts.append("the set's reference.csv / GTSPLIB's best_known.csv")
+        if self.own_proofs:
+            parts.append("a proven optimum of the benchmark's own solves")
         parts.append("the best found")
         return "; else ".join(parts)
 

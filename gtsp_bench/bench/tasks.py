@@ -128,7 +128,8 @@ def batch_key(members: Sequence[Task]) -> str:
 
 def hard_limit_for(time_limit: float | None) -> float:
     """Seconds after which a worker's solve of that time limit is killed
-    (:data:`HARD_LIMIT_FACTOR` x limit + :data:`HARD_LIMIT_GRACE_S`; 600 s without a limit)."""
+    (:data:`HARD_LIMIT_FACTOR` x limit + :data:`HARD_LIMIT_GRACE_S`; :data:`NO_LIMIT_HARD_S` without
+    a limit)."""
     if time_limit is None:
         return NO_LIMIT_HARD_S
     return HARD_LIMIT_FACTOR * time_limit + HARD_LIMIT_GRACE_S

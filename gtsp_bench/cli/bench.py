@@ -139,7 +139,9 @@ def report_only(name: str, settings: object) -> tuple[int, str]:
 
         if not any(out_dir.glob("*.csv")):
             raise InputError(f"{out_dir}: no experiment CSV files to report on; run bench first")
-        print(f"wrote {write_report(out_dir)}", file=sys.stderr)
+        from gtsp_bench.bench.runner import shipped_checkpoints
+
+        print(f"wrote {write_report(out_dir, shipped_checkpoints())}", file=sys.stderr)
         return 0, ""
     df = read_rows(out_dir / "rows.csv")
     text = summary_markdown(summary_table(df))

@@ -1,5 +1,5 @@
 """The benchmark report: the paper's reported values, its claims checked against this run's
-tables, and the generated blocks of ``results/README.md`` and of the documentation pages.
+tables, and the generated blocks of ``results/paper/README.md`` and of the documentation pages.
 
 Everything here reads the CSV files the runner wrote, so the report can be refreshed without
 re-running anything (``gtsp-bench bench --report-only``). A generated block is the text between
