@@ -215,19 +215,21 @@ class Benchmark:
 
 _HEURISTICS = ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp")
 _PEERS_TABLE = (*_HEURISTICS, "ortools", "lkh")
+#: The learned benchmark's runs: each policy at every K; its variants (the paper's head rule,
+#: reversal, sampling, augmentation, multi-start) at the generated K <= 10 only.
 _LEARNED = (
     run("greedy"),
     run("drl"),
-    run("drl", "drl heads=optimal", heads="optimal"),
-    run("drl", "drl reverse=true", reverse=True),
-    run("drl-sample", "drl-sample (S=64)"),
-    run("drl-sample", "drl-sample heads=optimal", heads="optimal"),
+    run("drl", "drl heads=optimal", max_k=10, heads="optimal"),
+    run("drl", "drl reverse=true", max_k=10, reverse=True),
+    run("drl-sample", "drl-sample (S=64)", max_k=10),
+    run("drl-sample", "drl-sample heads=optimal", max_k=10, heads="optimal"),
     run("am"),
-    run("am", "am heads=paper", heads="paper"),
-    run("am", "am augment=true", augment=True),
+    run("am", "am heads=paper", max_k=10, heads="paper"),
+    run("am", "am augment=true", max_k=10, augment=True),
     run("local"),
-    run("local", "local heads=paper", heads="paper"),
-    run("local", "local starts=8", starts=8),
+    run("local", "local heads=paper", max_k=10, heads="paper"),
+    run("local", "local starts=8", max_k=10, starts=8),
 )
 _LARGE_UAV = tuple(f"uav-K{k}-N20-s1" for k in (20, 50, 100, 200))
 _TABLE_GROUPS = (
