@@ -19,7 +19,7 @@ from gtsp_bench.registry import get_solver, run_solver
 
 REPO = Path(__file__).resolve().parents[1]
 INSTANCES = REPO / "instances"
-RESULTS = REPO / "results"
+RESULTS = REPO / "results" / "paper"
 #: K -> (instances, area in m) of every committed set uav-K{K}-N20-s1.
 SETS = {k: (30, 1000.0) for k in range(4, 11)} | {20: (20, 1000.0), 50: (20, 1500.0),
                                                   100: (20, 2000.0), 200: (20, 3000.0)}
@@ -120,7 +120,7 @@ def test_optimal_rows_agree_with_dp(k):
 
 
 def test_references_match_the_committed_results_optima():
-    """Every dp optimum in results/*.csv (written to 10 significant digits) is a reference row."""
+    """Every dp optimum in results/paper/*.csv (written to 10 significant digits) is a reference row."""
     refs = {(r["instance"], float(r["omega"])): float(r["value"])
             for k in SETS if k <= 10 for r in references(k)}
     checked = 0
