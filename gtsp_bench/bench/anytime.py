@@ -11,8 +11,8 @@ primal gap (Berthold 2013)
     runtime where it has none): 0 for the reference found at once, 1 for nothing found in time.
     After its answer a solve keeps its answer up to ``T``;
 ``time_to_1pct_s``, ``time_to_0p1pct_s``
-    the first time the incumbent is within 1 % / 0.1 % of the reference (``(obj - ref) / |ref|``),
-    NaN when it never is.
+    the first time, within ``T``, the incumbent is within 1 % / 0.1 % of the reference
+    (``(obj - ref) / |ref|``), NaN when it never is.
 
 The rows keep the trajectory compactly (:func:`format_trajectory`), so the metrics can be
 computed again from a ``rows.csv``.
@@ -65,11 +65,15 @@ def primal_integral(points: Sequence[Point], reference: float, horizon: float) -
     return total / horizon
 
 
-def time_to_target(points: Sequence[Point], reference: float, target: float) -> float:
-    """The first time the incumbent is within ``target`` (a fraction) of ``reference``."""
+def time_to_target(points: Sequence[Point], reference: float, target: float,
+                   horizon: float = math.inf) -> float:
+    """The first time, up to ``horizon``, the incumbent is within ``target`` (a fraction) of
+    ``reference``; NaN when it never is."""
     if not math.isfinite(reference) or reference == 0:
         return math.nan
     for time_s, obj, _ in points:
+        if time_s > horizon:
+            break
         if (obj - reference) / abs(reference) <= target + 1e-12:
             return time_s
     return math.nan
@@ -93,7 +97,7 @@ def metrics(points: Sequence[Point], reference: float, horizon: float) -> dict[s
     """The anytime columns of one solve."""
     out = {"primal_integral": primal_integral(points, reference, horizon)}
     for column, target in TARGETS.items():
-        out[column] = time_to_target(points, reference, target)
+        out[column] = time_to_target(points, reference, target, horizon)
     return out
 
 

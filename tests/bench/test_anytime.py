@@ -46,6 +46,7 @@ def test_time_to_target_is_the_first_incumbent_within_it():
     assert time_to_target(points, 100.0, 0.01) == 3.0
     assert time_to_target(points, 100.0, 0.001) == 5.0
     assert math.isnan(time_to_target(points[:1], 100.0, 0.01))
+    assert math.isnan(time_to_target(points, 100.0, 0.001, horizon=4.0)), "after the limit: not in time"
     m = metrics(points, 100.0, 10.0)
     assert m["time_to_1pct_s"] == 3.0 and m["time_to_0p1pct_s"] == 5.0 and 0 < m["primal_integral"] < 1
 
