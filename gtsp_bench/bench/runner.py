@@ -58,14 +58,12 @@ from gtsp_bench.bench.tasks import (
     RunFolder,
     StoredInstance,
     Task,
-    fingerprint,
     task_key,
 )
 from gtsp_bench.checks import parse_ks, parse_names
-from gtsp_bench.data.io import atomic_write_text, read_instance
-from gtsp_bench.data.parse import format_json_instance
+from gtsp_bench.data.io import atomic_write_text
 from gtsp_bench.errors import InputError
-from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args, instance_set
+from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args
 from gtsp_bench.report.paper import (
     ks_text,
     read_training_logs,
@@ -249,34 +247,11 @@ def make_config(
 
 # ---------------------------------------------------------------------- instances
 def load_instance_set(config: BenchConfig, k: int, n: int) -> list[StoredInstance]:
-    """The first ``n`` instances of the seeded set for K = ``k``, written once and re-used.
+    """The first ``n`` instances of the seeded set for K = ``k`` under ``config.instance_dir``,
+    written once and re-used (:func:`gtsp_bench.bench.sources.load_generated`)."""
+    from gtsp_bench.bench.sources import load_generated
 
-    A file present with other generator settings than asked is an error (it is never
-    overwritten); one whose coordinates differ from what the generator gives now is used, with a
-    warning.
-    """
-    folder = config.instance_dir / f"uav-K{k}-N{config.n_nodes}-s{config.seed}"
-    generated = instance_set(n, k, config.seed, config.n_nodes)
-    out = []
-    for fresh in generated:
-        path = folder / f"{fresh.name}.json"
-        fresh_text = format_json_instance(fresh)
-        if path.exists():
-            inst = read_instance(path)
-            text = path.read_text(encoding="utf-8")
-            want = dict(fresh.meta["generator"])
-            have = dict(inst.meta.get("generator", {}))
-            if have != want:
-                raise InputError(f"{path}: its generator settings {have} are not {want}; "
-                                 f"move it away to regenerate it")
-            if text != fresh_text:
-                print(f"gtsp-bench: warning: {path} differs from what the generator gives now; "
-                      f"using the file", file=sys.stderr)
-        else:
-            atomic_write_text(path, fresh_text)
-            inst, text = fresh, fresh_text
-        out.append(StoredInstance(inst, text, fingerprint(text), path))
-    return out
+    return load_generated(config.instance_dir, k, n, config.seed, config.n_nodes)
 
 
 # ---------------------------------------------------------------------- experiments -> tasks
