@@ -356,7 +356,7 @@ BENCHMARKS: dict[str, Benchmark] = {
         Benchmark(
             "exact-scale",
             "milp at scale: GTSPLIB to 442 nodes and UAV K = 20, 50, proven or the certified gap",
-            (Gtsplib(max_nodes=442), Generated((20, 50), 3, seed=0)),
+            (Gtsplib(max_nodes=442), Committed(("uav-K20-N20-s1", "uav-K50-N20-s1"), 3)),
             (run("milp"),),
             omegas=(0.0, 0.5, 0.9),
             budget=Budget(120.0),
