@@ -335,19 +335,35 @@ def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
     return out
 
 
+def _set_named(name: str, settings: Any) -> Any:
+    """The set a run's rows call ``name``: one of its ``--set`` arguments, else a committed set."""
+    from gtsp_bench.data.sets import resolve_set
+    from gtsp_bench.errors import InputError
+
+    where = getattr(settings, "instance_dir", "instances")
+    for arg in (*(getattr(settings, "sets", None) or ()), name):
+        try:
+            s = resolve_set(arg, where)
+        except InputError:
+            continue
+        if s.name == name:
+            return s
+    return None
+
+
 def _update_references(
     bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any
 ) -> list[Path]:
-    from gtsp_bench.data.sets import read_reference, resolve_set, strictly_better, write_reference
+    from gtsp_bench.data.sets import read_reference, strictly_better, write_reference
 
     if bench.name != "references" and not getattr(settings, "update_reference", False):
         return []
     today = dt.date.today().isoformat()
     written = []
     for set_name, rows in new_references(df, today).items():
-        try:
-            s = resolve_set(set_name, getattr(settings, "instance_dir", "instances"))
-        except Exception:
+        s = _set_named(set_name, settings)
+        if s is None:
+            say(f"warning: {set_name}: no such set folder; its reference.csv was not updated")
             continue
         if s.reference_path is None:
             say(f"warning: {set_name}: GTSPLIB's values are GLKH's tours (best_known.csv); not updated")

@@ -207,7 +207,10 @@ def render(
     from gtsp_bench.bench.output_kinds import OUTPUTS
 
     written: list[Path] = []
-    for name in bench.outputs:
+    names = list(bench.outputs)
+    if getattr(settings, "update_reference", False) and "update-references" not in names:
+        names.append("update-references")  # --update-reference works on any benchmark
+    for name in names:
         written += OUTPUTS[name](bench, df, out_dir, settings, say)
     return written
 

@@ -356,3 +356,29 @@ def test_solver_failures_stay_until_retry_failed_and_refusals_are_not_failures(t
     assert "0 solves run, 2 re-used, 1 failed" in capsys.readouterr().err
     assert main([*base, "--solvers", "t-crash", "--retry-failed"]) == 1
     assert "1 solves run, 1 re-used, 1 failed" in capsys.readouterr().err
+
+
+def test_update_reference_writes_a_better_tour_into_the_sets_reference_csv(tmp_path, capsys):
+    """A set whose best_known value greedy beats: the run says so; with --update-reference the
+    row is replaced (solver, date) and a point without a row gets one; a proven optimum stays."""
+    from gtsp_bench.data.io import write_instance
+    from gtsp_bench.data.sets import read_reference
+    from gtsp_bench.generator import generate_instance
+
+    folder = tmp_path / "mine"
+    for i in range(2):
+        write_instance(generate_instance(3, 4, seed=i, name=f"mine-{i}"), folder / f"mine-{i}.json")
+    (folder / "reference.csv").write_text(
+        "instance,omega,value,lower_bound,status,source,date\n"
+        "mine-0,0.5,1e9,,best_known,a guess,2026-01-01\n")
+    argv = ["bench", "sets", "--set", str(folder), "--solvers", "greedy", "--omegas", "0.5", "--jobs", "1",
+            "--out", str(tmp_path / "out"), "--no-progress"]
+    assert main(argv) == 0
+    assert "better than the best known: mine/mine-0" in capsys.readouterr().err
+    assert read_reference(folder / "reference.csv")[("mine-0", 0.5)].value == 1e9
+    assert main([*argv, "--update-reference"]) == 0
+    refs = read_reference(folder / "reference.csv")
+    rows = pd.read_csv(tmp_path / "out" / "rows.csv").set_index("instance")
+    assert refs[("mine-0", 0.5)].value == pytest.approx(rows.loc["mine-0", "objective"], rel=1e-9)
+    assert refs[("mine-0", 0.5)].source == "greedy 10s" and refs[("mine-0", 0.5)].status == "best_known"
+    assert refs[("mine-1", 0.5)].value == pytest.approx(rows.loc["mine-1", "objective"], rel=1e-9)
