@@ -307,7 +307,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             tuple(run(s) for s in _PEERS_TABLE),
             budget=Budget(10.0),
             outputs=("profile", "anytime", "doc-heuristics"),
-            rough_time="30 min",
+            rough_time="10 min",
             quick={
                 "sources": (Gtsplib(("11berlin52", "20kroA100")), Committed(("uav-K20-N20-s1",), 1)),
                 "budget": Budget(2.0),
@@ -363,7 +363,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             reference=Reference(own_proofs=True),
             outputs=("doc-exact-scale",),
             jobs=1,
-            rough_time="2 h",
+            rough_time="10 min",
             quick={
                 "sources": (Gtsplib(("11berlin52", "20kroA100", "40d198")),),
                 "budget": Budget(30.0),
@@ -400,7 +400,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             tuple(run(s) for s in ("greedy", "aco", "drl", "am", "local", "lns")),
             budget=Budget(10.0),
             outputs=("profile", "gap-k", "anytime"),
-            rough_time="35 min",
+            rough_time="6 min",
             quick={"sources": (Committed(("uav-K20-N20-s1", "uav-K50-N20-s1"), 1),), "budget": Budget(2.0)},
         ),
         Benchmark(
