@@ -420,7 +420,7 @@ def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict
         Cluster sizes of the instance the record's key names, when known: ``order`` must then be
         a permutation of its clusters and ``heads`` valid indices.
 
-    The key is ``NAME#HASH|SOLVER[@REVISION]|w=OMEGA|seed=SEED|tl=LIMIT``; ``solver``, ``omega``
+    The key is ``NAME#HASH|SOLVER[@REVISION][[OPTIONS]]|w=OMEGA|seed=SEED|tl=LIMIT``; ``solver``, ``omega``
     (and ``seed`` and ``time_limit`` when present) must agree with it. A solved status needs a
     finite ``objective`` and an ``order`` and ``heads`` of one entry per cluster; ``failed`` and
     ``refused`` need a null (or NaN, as older logs wrote) objective and no tour; ``time_limit``
@@ -436,7 +436,7 @@ def check_log_record(record: object, sizes: Sequence[int] | None = None) -> dict
     parts = key.split("|")
     if len(parts) != 5 or not parts[2].startswith("w=") or not parts[3].startswith("seed="):
         raise InputError(f"key {key!r} is not NAME#HASH|SOLVER|w=OMEGA|seed=SEED|tl=LIMIT")
-    if record.get("solver") != parts[1].split("@")[0]:
+    if record.get("solver") != parts[1].split("[")[0].split("@")[0]:
         raise InputError(f"solver {record.get('solver')!r} does not match the key")
     omega = record.get("omega")
     if not is_number(omega) or f"{omega:g}" != parts[2][2:]:

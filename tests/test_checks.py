@@ -178,6 +178,19 @@ def test_check_log_record_accepts_a_real_record():
         check_log_record({**rec, "key": "i|dp"})
 
 
+def test_a_record_of_a_solver_with_options_matches_its_key():
+    """A key names the solver's options after its name (and revision): such a record is the
+    solver's, so a rerun re-uses it; a record of another solver under that key is refused."""
+    rec = {"key": "i#ab|milp-textbook[subtour='mtz']|w=0.5|seed=0|tl=60", "solver": "milp-textbook",
+           "omega": 0.5, "seed": 0, "status": "optimal", "objective": 12.5, "order": [1, 0],
+           "heads": [0, 0], "runtime_s": 0.1, "note": ""}
+    assert check_log_record(rec) is rec
+    revised = {**rec, "key": "i#ab|drl@f98[heads='optimal']|w=0.5|seed=0|tl=none", "solver": "drl"}
+    assert check_log_record(revised) is revised
+    with pytest.raises(InputError, match="solver 'milp' does not match the key"):
+        check_log_record({**rec, "solver": "milp"})
+
+
 def test_no_hand_written_type_checks_outside_this_module():
     """Input checks live in gtsp_bench.checks: no other module of the package or of solvers/
     writes its own ``isinstance(x, bool)`` test (the sign of a hand-rolled number check)."""
