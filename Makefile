@@ -46,7 +46,7 @@ bench-%: $(STAMP)
 	$(BIN)/python -m gtsp_bench.cli bench $* $(if $(QUICK),--quick) $(BENCH_ARGS)
 
 # Every committed table and figure, regenerated: the benchmarks whose outputs results/ and docs/
-# hold (about 1 h 15 min on 2 cores, measured 2026-11-27; a rerun re-uses every finished solve).
+# hold (about 1 h 25 min on 2 cores, measured 2026-11-27; a rerun re-uses every finished solve).
 BENCH_ALL = paper heuristics-table learned scale textbook exact-scale
 bench-all: $(STAMP)
 	status=0; for b in $(BENCH_ALL); do \

@@ -385,7 +385,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             reference=Reference(exact=(("dp", 12),)),
             outputs=("doc-textbook",),
             jobs=1,
-            rough_time="40 min",
+            rough_time="30 min",
             quick={
                 "sources": (Committed(("uav-K4-N20-s1", "uav-K5-N20-s1"), 1),),
                 "budget": Budget(20.0),
