@@ -19,7 +19,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import statistics
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -261,12 +261,10 @@ def glns_lines(df: pd.DataFrame) -> list[str]:
     """Per instance: budget, mean gap, hits and worst run beside GLNS's C++ numbers; the targets."""
     import csv
 
-    from gtsp_bench.bench.sources import glns_times
     from gtsp_bench.data import gtsplib
 
     with (gtsplib.folder() / "glns-45.csv").open(newline="") as f:
         glns = {r["instance"]: r for r in csv.DictReader(f)}
-    glns_times()
     lines = [
         "| instance | budget s | mean gap % | hits | worst % | GLNS C++ gap % | GLNS hits | GLNS s |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",
@@ -389,10 +387,6 @@ def _update_references(
     return written
 
 
-def _nothing(*_: Any) -> list[Path]:
-    return []
-
-
 OUTPUTS: dict[str, Output] = {
     "profile": _profile,
     "anytime": _anytime,
@@ -403,18 +397,12 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def output_names() -> Sequence[str]:
-    """Every output a definition may name."""
-    return tuple(OUTPUTS)
-
-
 __all__ = [
     "DOC_BLOCKS",
     "OUTPUTS",
     "gap_time_cell",
     "glns_lines",
     "new_references",
-    "output_names",
     "pivot_markdown",
     "proof_cell",
 ]

@@ -25,7 +25,7 @@ from typing import Any
 
 import pandas as pd
 
-from gtsp_bench.bench.definitions import Benchmark
+from gtsp_bench.bench.definitions import Benchmark, Reference
 from gtsp_bench.bench.rows import (
     BELOW_OPTIMUM,
     BETTER_THAN_BEST_KNOWN,
@@ -168,7 +168,7 @@ def errors_of(df: pd.DataFrame) -> list[str]:
 
 def write_all(bench: Benchmark, settings: Any, p: Any, outcome: Any, say: Callable[[str], None]) -> None:
     """The rows of a grid run and every output of its definition."""
-    table_refs = references(type(bench.reference)(table=True), p.cells, {}, {})
+    table_refs = references(Reference(table=True), p.cells, {}, {})
     refs = references(bench.reference, p.cells, outcome.records, p.exact)
     df = make_rows(
         bench.name,

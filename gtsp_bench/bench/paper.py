@@ -9,7 +9,7 @@ a run re-uses every solve of an earlier ``make bench``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -46,21 +46,22 @@ def paper_config(bench: Benchmark, settings: Any, jobs: int) -> Any:
 
 
 def paper_cells(
-    config: Any,
+    config: Any, sets: Mapping[int, Sequence[Any]], tasks: Mapping[str, Any]
 ) -> tuple[list[Cell], dict[tuple[str, str, float | None], tuple[str, str]], list[Entry]]:
-    """One cell per task of the experiments, the reference task of each point, the entries."""
-    from gtsp_bench.bench.runner import SOLVER_SEED, paper_options, plan
+    """One cell per task of the experiments (``sets`` and ``tasks`` as the runner planned them),
+    the reference task of each point, the entries."""
+    from gtsp_bench.bench.runner import SOLVER_SEED, paper_options
     from gtsp_bench.bench.tasks import task_key
 
-    sets, tasks = plan(config)
     entries: dict[str, Entry] = {}
-    for stored in (s for insts in sets.values() for s in insts):
-        folder = Path(stored.path).parent
-        refs = read_reference(folder / "reference.csv")
-        stem = Path(stored.path).stem
-        entries[stored.fingerprint] = Entry(
-            folder.name, stem, stored, {w: r for (s, w), r in refs.items() if s == stem}
-        )
+    for insts in sets.values():
+        folder = Path(insts[0].path).parent
+        refs = read_reference(folder / "reference.csv")  # once per set
+        for stored in insts:
+            stem = Path(stored.path).stem
+            entries[stored.fingerprint] = Entry(
+                folder.name, stem, stored, {w: r for (s, w), r in refs.items() if s == stem}
+            )
     cells, exact = [], {}
     for key, t in tasks.items():
         e = entries[t.instance.fingerprint]
@@ -81,7 +82,7 @@ def run_paper(bench: Benchmark, settings: Any, config: Any, say: Callable[[str],
     from gtsp_bench.bench.runner import _run_bench
 
     summary = _run_bench(config, say)
-    cells, exact, entries = paper_cells(config)
+    cells, exact, entries = paper_cells(config, summary.sets, summary.task_map)
     refs = references(bench.reference, cells, summary.records, exact)
     df = make_rows(bench.name, cells, summary.records, refs)
     extra = {

@@ -10,6 +10,7 @@ rule: a file with other generator settings is an error, never overwritten).
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import sys
 from collections.abc import Mapping, Sequence
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from gtsp_bench.bench.definitions import Committed, Generated, Gtsplib, Source
 from gtsp_bench.bench.tasks import StoredInstance, fingerprint
-from gtsp_bench.data.sets import ReferenceRow, read_reference, read_set_file, resolve_set
+from gtsp_bench.data.sets import ReferenceRow, SetFile, read_reference, read_set_file, resolve_set
 from gtsp_bench.errors import InputError
 
 #: Where a committed set's generated files live: ``instances/uav-K{K}-N{N}-s{seed}``.
@@ -51,7 +52,7 @@ class Entry:
         inst = self.stored.instance
         return int(inst.sizes[0]) if inst.is_uav else inst.n_nodes
 
-    @property
+    @functools.cached_property
     def sha256(self) -> str:
         """The SHA-256 of the instance file's (uncompressed) text."""
         return hashlib.sha256(self.stored.text.encode()).hexdigest()
@@ -177,20 +178,13 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
     out = []
     for label, r in picked:
         path = gtsplib.path(r.name)
-        inst, text, digest = read_set_file_path(path, r.name)
+        inst, text, digest = read_set_file(SetFile(path, r.name))
         source = "Fischetti et al. 1997; GLKH tour" if r.proven else "GLKH"
         ref = ReferenceRow(r.name, None, r.value, None, r.status, source, "")
         out.append(
             Entry(label, r.name, StoredInstance(inst, text, digest, path), {None: ref}, glns.get(r.name))
         )
     return out
-
-
-def read_set_file_path(path: Path, stem: str) -> tuple[object, str, str]:
-    """:func:`gtsp_bench.data.sets.read_set_file` of a path."""
-    from gtsp_bench.data.sets import SetFile
-
-    return read_set_file(SetFile(path, stem))
 
 
 def load_sources(
