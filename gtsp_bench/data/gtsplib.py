@@ -18,6 +18,7 @@ import csv
 import difflib
 import io
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -37,6 +38,8 @@ STATUSES = ("optimal", "best_known")
 _REPO_FOLDER = Path(__file__).resolve().parents[2] / "instances" / "gtsplib"
 _COLUMNS = ("name", "clusters", "nodes", "best_known", "status", "type", "edge_weight_type",
             "edge_weight_format", "tour")
+#: Columns a table may leave out (older copies of the library): empty when absent.
+_OPTIONAL = ("source", "date", "certificate")
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,15 @@ class Reference:
     edge_weight_type, edge_weight_format
         As the file says (the format is empty for coordinate types).
     tour
-        GLKH's tour file, relative to the library folder.
+        The best tour's file, relative to the library folder.
+    source
+        Who found :attr:`tour` (``GLKH`` for the distributed tours, else the solver and options
+        that found a better one, e.g. ``gtsp-bench lns seed 3``).
+    date
+        When :attr:`source` found it (ISO date; empty for the distributed tours).
+    certificate
+        A proof certificate of optimality (``gtsp-bench check-proof`` checks it), relative to the
+        library folder; empty where none is shipped.
     """
 
     name: str
@@ -71,6 +82,9 @@ class Reference:
     edge_weight_type: str
     edge_weight_format: str
     tour: str
+    source: str = ""
+    date: str = ""
+    certificate: str = ""
 
     @property
     def proven(self) -> bool:
@@ -101,7 +115,8 @@ def parse_best_known(text: str) -> dict[str, Reference]:
         try:
             ref = Reference(row["name"], int(row["clusters"]), int(row["nodes"]),
                             float(row["best_known"]), row["status"], row["type"],
-                            row["edge_weight_type"], row["edge_weight_format"], row["tour"])
+                            row["edge_weight_type"], row["edge_weight_format"], row["tour"],
+                            *((row.get(c) or "") for c in _OPTIONAL))
         except (TypeError, ValueError):
             raise InputError(f"line {line}: bad row {row!r}") from None
         if ref.status not in STATUSES:
@@ -110,6 +125,19 @@ def parse_best_known(text: str) -> dict[str, Reference]:
             raise InputError(f"line {line}: {ref.name} is listed twice")
         out[ref.name] = ref
     return out
+
+
+def format_best_known(references: Iterable[Reference]) -> str:
+    """The text of a ``best_known.csv`` holding ``references`` in the given order (the inverse of
+    :func:`parse_best_known`; integral values are written without a decimal point)."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow((*_COLUMNS, *_OPTIONAL))
+    for r in references:
+        value = int(r.value) if float(r.value).is_integer() else r.value
+        writer.writerow((r.name, r.clusters, r.nodes, value, r.status, r.type, r.edge_weight_type,
+                         r.edge_weight_format, r.tour, r.source, r.date, r.certificate))
+    return out.getvalue()
 
 
 def folder() -> Path:

@@ -164,3 +164,20 @@ def test_bad_reference_tables(text, message):
     """A malformed best_known.csv is an InputError naming the line."""
     with pytest.raises(InputError, match=message):
         gtsplib.parse_best_known(text)
+
+
+def test_reference_table_round_trips():
+    """format_best_known writes what parse_best_known reads, the optional columns included."""
+    table = gtsplib.best_known()
+    text = gtsplib.format_best_known(table.values())
+    assert gtsplib.parse_best_known(text) == table
+    assert text == (gtsplib.folder() / "best_known.csv").read_text(encoding="utf-8")
+
+
+def test_optional_reference_columns_default_to_empty():
+    """A table without source, date and certificate columns reads them as empty."""
+    text = ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
+            "x,1,2,3.5,optimal,GTSP,EUC_2D,,t\n")
+    ref = gtsplib.parse_best_known(text)["x"]
+    assert (ref.value, ref.source, ref.date, ref.certificate) == (3.5, "", "", "")
+    assert gtsplib.parse_best_known(gtsplib.format_best_known([ref]))["x"] == ref
