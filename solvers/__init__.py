@@ -58,6 +58,9 @@ BUILTIN: tuple[Builtin, ...] = (
             "attention model, best of K greedy POMO starts, optimal heads for the order"),
     Builtin("local", f"{_L}.local_solver:Local",
             "local-view policy re-encoded each step (imitation of lns), greedy; -p starts=S rotated views"),
+    Builtin("local-search", f"{_L}.search:LocalSearchSolver",
+            "local-view policy as a search: multi-start, 2-opt/or-opt, segments re-decoded by the "
+            "policy (0.01 s x K)"),
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),

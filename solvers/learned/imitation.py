@@ -22,6 +22,10 @@ config), ``CKPT.imitation.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``; n
 ``.train.csv``: the runner's training figure reads those, REINFORCE logs of reward and energy).
 
     python -m gtsp_bench.solvers.learned.imitation --recipe local -o local.pt
+
+On a machine with a GPU and many cores, ``--device cuda --workers 15`` solves the labels and walks
+the states in 15 processes and trains on the GPU (the ``local-gpu`` recipes are sized for that);
+the policy file is saved with CPU tensors either way.
 """
 
 from __future__ import annotations
@@ -31,9 +35,10 @@ import dataclasses
 import io
 import json
 import math
+import multiprocessing
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -115,11 +120,16 @@ class ImitationConfig:
         if self.label_seed in (1, 5_000, 6_000):
             raise InputError(f"label seed {self.label_seed} is a test set's seed")
 
-    def command(self, output: str | Path) -> str:
-        """The command line that repeats this run."""
+    def command(self, output: str | Path, device: str = "cpu", workers: int = 1) -> str:
+        """The command line that repeats this run (on ``device``, labels in ``workers``)."""
+        extra = (f" --device {device}" if device != "cpu" else "") + (
+            f" --workers {workers}" if workers > 1 else "")
         return (f"python -m gtsp_bench.solvers.learned.imitation --recipe {self.recipe} "
-                f"--max-time {self.max_time:g} --seed {self.seed} -o {output}")
+                f"--max-time {self.max_time:g} --seed {self.seed}{extra} -o {output}")
 
+
+_GPU_MIX = ((10, 1000, 1000.0), (20, 2500, 1000.0), (30, 1500, 1200.0), (50, 2000, 1500.0),
+            (100, 400, 2000.0))
 
 #: The named recipes. ``local``: the shipped ``checkpoints/local.pt``; ``local-small``: a short
 #: run on fewer labels (the fallback, and a quick check that training works).
@@ -129,6 +139,20 @@ RECIPES: dict[str, ImitationConfig] = {
         mix=((10, 1000, 1000.0), (20, 2500, 1000.0), (30, 1500, 1200.0), (50, 700, 1500.0),
              (100, 40, 2000.0)),
         max_time=1620.0,
+    ),
+    # GPU runs: more labels at K >= 50, bigger batches, labels and states in
+    # 15 processes (``--device cuda --workers 15``); the same policy size as ``local``.
+    "local-gpu": ImitationConfig(
+        recipe="local-gpu",
+        mix=_GPU_MIX,
+        batch=1024, lr=1.5e-3, max_time=165.0, val_every=2000, log_every=200,
+    ),
+    # the same with a wider, deeper policy (dearer on a CPU)
+    "local-gpu-l3": ImitationConfig(
+        recipe="local-gpu-l3",
+        mix=_GPU_MIX,
+        model_options={"dim": 96, "n_layers": 3, "ff": 192},
+        batch=1024, lr=1e-3, max_time=165.0, val_every=2000, log_every=200,
     ),
     "local-small": ImitationConfig(
         recipe="local-small",
@@ -145,6 +169,25 @@ def get_recipe(name: str, **overrides: Any) -> ImitationConfig:
 
 
 # ---------------------------------------------------------------------- labels
+def _pool(workers: int, warm: bool = False) -> Any:
+    """A ``fork`` pool of ``workers`` processes (``None`` for one: work in this process). With
+    ``warm``, lns's kernels are compiled here first (once), so that the workers inherit them."""
+    if workers <= 1:
+        return None
+    global _WARM
+    if warm and not _WARM:
+        from gtsp_bench.registry import get_solver
+
+        inst = instance_set(1, 5, 1, 20)[0]
+        get_solver("lns", stop_at_convergence=True).solve(inst, 0.5, time_limit=10.0, seed=0)
+        _WARM = True
+    return multiprocessing.get_context("fork").Pool(workers)
+
+
+_WARM = False
+
+
+
 def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max: float,
               ) -> tuple[list[Any], np.ndarray]:
     """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``)."""
@@ -154,25 +197,44 @@ def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max:
     return insts, omegas
 
 
-def solve_labels(insts: Sequence[Any], omegas: Sequence[float], say: Any = None,
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Orders ``(n, K)`` and objectives ``(n,)`` of ``lns`` (stop at convergence) on each."""
+#: The instances and omegas being labelled (set before a pool forks: instances don't pickle).
+_JOBS: tuple[Sequence[Any], Sequence[float]] = ((), ())
+
+
+def _solve_one(i: int) -> tuple[tuple[int, ...], float]:
+    """Label ``i`` of :data:`_JOBS`: ``lns`` (stop at convergence, seed ``i``)."""
     from gtsp_bench.energy import evaluate
     from gtsp_bench.registry import get_solver
 
-    lns = get_solver("lns", stop_at_convergence=True)
+    inst, w = _JOBS[0][i], float(_JOBS[1][i])
+    sol = get_solver("lns", stop_at_convergence=True).solve(inst, w, time_limit=120.0, seed=i)
+    return sol.order, evaluate(inst, w, sol.order, sol.heads).objective
+
+
+def solve_labels(insts: Sequence[Any], omegas: Sequence[float], say: Any = None,
+                 workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Orders ``(n, K)`` and objectives ``(n,)`` of ``lns`` (stop at convergence) on each, in
+    ``workers`` forked processes when more than one: the same labels either way."""
+    global _JOBS
+    _JOBS = (insts, omegas)
+    pool = _pool(workers, warm=True)
+    run = pool.imap(_solve_one, range(len(insts)), chunksize=2) if pool else map(
+        _solve_one, range(len(insts)))
     orders, values = [], []
-    for i, (inst, w) in enumerate(zip(insts, omegas, strict=True)):
-        sol = lns.solve(inst, float(w), time_limit=120.0, seed=i)
-        orders.append(sol.order)
-        values.append(evaluate(inst, float(w), sol.order, sol.heads).objective)
+    for i, (order, value) in enumerate(run):
+        orders.append(order)
+        values.append(value)
         if say is not None and (i + 1) % 100 == 0:
-            say(f"labels K={inst.n_clusters}: {i + 1}/{len(insts)}")
+            say(f"labels K={insts[i].n_clusters}: {i + 1}/{len(insts)}")
+    if pool is not None:
+        pool.close()
+        pool.join()
+    _JOBS = ((), ())
     return np.array(orders, dtype=np.int64), np.array(values)
 
 
 def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = None,
-                         ) -> tuple[dict[tuple[int, int, float], np.ndarray], float]:
+                         workers: int = 1) -> tuple[dict[tuple[int, int, float], np.ndarray], float]:
     """Label orders per mix entry, from ``cache`` when it holds that entry; returns them and the
     seconds spent solving new ones (new ones are added to the cache)."""
     stored: dict[str, np.ndarray] = {}
@@ -185,7 +247,7 @@ def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = No
         if key not in stored:
             t = time.perf_counter()
             insts, omegas = label_set(k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
-            stored[key] = solve_labels(insts, omegas, say)[0]
+            stored[key] = solve_labels(insts, omegas, say, workers)[0]
             spent += time.perf_counter() - t
             if cache is not None:
                 buf = io.BytesIO()
@@ -239,19 +301,32 @@ def walk_states(env: EnvBatch, orders: torch.Tensor, k: int) -> tuple[Samples, f
     return Samples.join(parts), seen / max(total, 1)
 
 
+def _chunk_states(task: tuple[ImitationConfig, int, int, float, int, np.ndarray, int],
+                  ) -> tuple[list[Samples], float]:
+    """The states of label tours ``lo .. lo + len(orders)`` of one mix entry, both directions."""
+    cfg, kk, n, area, lo, orders, k = task
+    torch.set_num_threads(1)
+    insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
+    env = env_from_instances(insts[lo:lo + len(orders)], omegas[lo:lo + len(orders)].tolist())
+    o = torch.from_numpy(orders)
+    parts, share = [], 0.0
+    for direction in (o, o.flip(1)):
+        s, share = walk_states(env, direction, k)
+        parts.append(s)
+    return parts, share
+
+
 def build_samples(cfg: ImitationConfig, labels: dict[tuple[int, int, float], np.ndarray], k: int,
-                  ) -> tuple[Samples, dict[str, float]]:
-    """Every state of every label tour in both directions; the in-view share per K."""
+                  pool: Any = None) -> tuple[Samples, dict[str, float]]:
+    """Every state of every label tour in both directions (in ``pool`` when given, the same
+    states in the same order); the in-view share per K."""
+    tasks = [(cfg, kk, n, area, lo, orders[lo:lo + 500], k)
+             for (kk, n, area), orders in labels.items() for lo in range(0, n, 500)]
+    mapper: Callable[..., Any] = pool.map if pool is not None else lambda f, t: list(map(f, t))
     parts, coverage = [], {}
-    for (kk, n, area), orders in labels.items():
-        insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
-        for lo in range(0, n, 500):
-            env = env_from_instances(insts[lo:lo + 500], omegas[lo:lo + 500].tolist())
-            o = torch.from_numpy(orders[lo:lo + 500])
-            for direction in (o, o.flip(1)):
-                s, share = walk_states(env, direction, k)
-                parts.append(s)
-                coverage[str(kk)] = share
+    for task, (chunk, share) in zip(tasks, mapper(_chunk_states, tasks), strict=True):
+        parts.extend(chunk)
+        coverage[str(task[1])] = share
     return Samples.join(parts), coverage
 
 
@@ -266,12 +341,13 @@ def random_maps(n: int, generator: torch.Generator) -> torch.Tensor:
 
 
 def imitation_loss(model: LocalPolicy, batch: Samples, maps: torch.Tensor,
-                   ) -> tuple[torch.Tensor, float]:
-    """Cross-entropy of the target candidates, and the share the model ranks first."""
+                   ) -> tuple[torch.Tensor, torch.Tensor]:
+    """Cross-entropy of the target candidates, and the share the model ranks first (a 0-d
+    tensor: reading it would wait for a GPU)."""
     logits = model.scores(*turn((batch.cand_vec, batch.cand_sc, batch.ctx_vec, batch.ctx_sc), maps),
                           batch.mask)
     loss = nn.functional.cross_entropy(logits, batch.target)
-    acc = float((logits.argmax(-1) == batch.target).float().mean())
+    acc = (logits.argmax(-1) == batch.target).float().mean().detach()
     return loss, acc
 
 
@@ -303,20 +379,33 @@ def _write_log(path: Path, rows: list[dict[str, Any]]) -> None:
 
 
 def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None = None,
-          progress: bool = True) -> dict[str, Any]:
-    """Run ``cfg`` (labels, states, training); returns the JSON metadata written beside it."""
+          progress: bool = True, device: str = "cpu", workers: int = 1,
+          labels_only: bool = False) -> dict[str, Any]:
+    """Run ``cfg`` (labels, states, training) on ``device``, labels and states in ``workers``
+    processes; returns the JSON metadata written beside it (nothing with ``labels_only``: the
+    labels are solved into the cache and the run stops)."""
     def say(text: str) -> None:
         if progress:
             print(text, file=sys.stderr, flush=True)
 
+    dev = torch.device(device)
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     paths = output_paths(output)
     cache = Path(labels) if labels else paths["labels"]
     start = time.perf_counter()
-    label_orders, label_s = load_or_solve_labels(cfg, cache, say)
+    label_orders, label_s = load_or_solve_labels(cfg, cache, say, workers)
+    if labels_only:
+        say(f"labels in {cache}: {label_s:.0f} s")
+        return {}
     model = LocalPolicy(**cfg.model_options)
-    data, coverage = build_samples(cfg, label_orders, model.k)
+    pool = _pool(workers)
+    try:
+        data, coverage = build_samples(cfg, label_orders, model.k, pool)
+    finally:
+        if pool is not None:
+            pool.close()
+            pool.join()
     say(f"{len(data)} states; next cluster in view: {coverage}")
     vk, vn, varea = cfg.val
     vinsts = instance_set(vn, vk, VAL_SEED, cfg.nodes, area=varea)
@@ -326,14 +415,33 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
     vref_t = torch.from_numpy(vref)
     prep_s = time.perf_counter() - start
     gen = torch.Generator().manual_seed(cfg.seed)
+    model.to(dev)
+    data = Samples(*(getattr(data, f.name).to(dev) for f in dataclasses.fields(Samples)))
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     rows: list[dict[str, Any]] = []
     best, best_step = math.inf, 0
     t0 = time.perf_counter()
-    window: list[tuple[float, float]] = []
+    window: list[tuple[torch.Tensor, torch.Tensor]] = []
     step = 0
     model.train()
     meta: dict[str, Any] = {}
+
+    def validate() -> float:
+        nonlocal best, best_step
+        cpu = LocalPolicy(**cfg.model_options)
+        cpu.load_state_dict({k: v.cpu() for k, v in model.state_dict().items()})
+        gap = greedy_gap(cpu, venv, vref_t)
+        if gap < best:
+            best, best_step = gap, step
+            save_policy(cpu, paths["policy"])
+        return gap
+
+    def write_meta() -> None:
+        nonlocal meta
+        meta = _meta(cfg, paths, step, best, best_step, label_s, prep_s, time.perf_counter() - t0,
+                     coverage, len(data), device, workers)
+        atomic_write_text(paths["meta"], json.dumps(meta, indent=2) + "\n")
+
     while step < cfg.steps:
         wall = time.perf_counter() - t0
         if wall >= cfg.max_time:
@@ -341,51 +449,43 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
         lr = cfg.lr * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * wall / cfg.max_time)))
         for g in opt.param_groups:
             g["lr"] = lr
-        idx = torch.randint(len(data), (cfg.batch,), generator=gen)
-        loss, acc = imitation_loss(model, data.take(idx), random_maps(cfg.batch, gen))
+        idx = torch.randint(len(data), (cfg.batch,), generator=gen).to(dev)
+        loss, acc = imitation_loss(model, data.take(idx), random_maps(cfg.batch, gen).to(dev))
         opt.zero_grad(set_to_none=True)
         loss.backward()
         nn.utils.clip_grad_norm_(model.parameters(), 1.0)
         opt.step()
         step += 1
-        window.append((float(loss.detach()), acc))
+        window.append((loss.detach(), acc))
         if step % cfg.log_every == 0:
-            row: dict[str, Any] = {"step": step, "loss": float(np.mean([w[0] for w in window])),
-                                   "accuracy": float(np.mean([w[1] for w in window])), "lr": lr,
-                                   "val_gap_pct": "", "wall_s": round(time.perf_counter() - t0, 1)}
+            row: dict[str, Any] = {
+                "step": step, "loss": float(torch.stack([w[0] for w in window]).mean()),
+                "accuracy": float(torch.stack([w[1] for w in window]).mean()), "lr": lr,
+                "val_gap_pct": "", "wall_s": round(time.perf_counter() - t0, 1)}
             window = []
             if step % cfg.val_every == 0:
-                gap = greedy_gap(model, venv, vref_t)
+                gap = validate()
                 row["val_gap_pct"] = gap
-                if gap < best:
-                    best, best_step = gap, step
-                    save_policy(model, paths["policy"])
                 say(f"step {step}: loss {row['loss']:.4f} acc {row['accuracy']:.3f} "
                     f"val gap {gap:.2f} % (best {best:.2f} % at {best_step})")
             rows.append(row)
             _write_log(paths["log"], rows)
-            meta = _meta(cfg, paths, step, best, best_step, label_s, prep_s, time.perf_counter() - t0,
-                         coverage, len(data))
-            atomic_write_text(paths["meta"], json.dumps(meta, indent=2) + "\n")
-    gap = greedy_gap(model, venv, vref_t)
-    if gap < best:
-        best, best_step = gap, step
-        save_policy(model, paths["policy"])
+            write_meta()
+    gap = validate()
     rows.append({"step": step, "loss": "", "accuracy": "", "lr": "", "val_gap_pct": gap,
                  "wall_s": round(time.perf_counter() - t0, 1)})
     _write_log(paths["log"], rows)
-    meta = _meta(cfg, paths, step, best, best_step, label_s, prep_s, time.perf_counter() - t0,
-                 coverage, len(data))
-    atomic_write_text(paths["meta"], json.dumps(meta, indent=2) + "\n")
+    write_meta()
     return meta
 
 
 def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, best_step: int,
           label_s: float, prep_s: float, train_s: float, coverage: dict[str, float],
-          n_states: int) -> dict[str, Any]:
+          n_states: int, device: str = "cpu", workers: int = 1) -> dict[str, Any]:
     return {
         "model": "local",
-        "command": cfg.command(paths["policy"]),
+        "command": cfg.command(paths["policy"], device, workers),
+        "device": torch.cuda.get_device_name() if device.startswith("cuda") else "cpu",
         "seed": cfg.seed,
         "steps": best_step,
         "steps_trained": step,
@@ -413,6 +513,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="training seconds (default: the recipe's)")
     p.add_argument("--seed", type=arg_seed, default=None, help="seed of the weights and batches")
     p.add_argument("--labels", default=None, help="label cache (default: CKPT.labels.npz)")
+    p.add_argument("--device", default="cpu", help="torch device of the training (default: cpu)")
+    p.add_argument("--workers", type=int, default=1,
+                   help="processes for the labels and states (default: 1)")
+    p.add_argument("--labels-only", action="store_true",
+                   help="solve the labels into the cache and stop")
     p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     p.add_argument("-o", "--output", required=True, help="policy file to write")
     args = p.parse_args(argv)
@@ -423,7 +528,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.seed is not None:
             over["seed"] = args.seed
         cfg = get_recipe(args.recipe, **over)
-        meta = train(cfg, args.output, labels=args.labels, progress=not args.no_progress)
+        if args.workers < 1:
+            raise InputError(f"--workers must be at least 1, got {args.workers}")
+        try:
+            dev = torch.device(args.device)
+        except (RuntimeError, ValueError) as e:
+            raise InputError(f"bad device {args.device!r}: {str(e).splitlines()[0]}") from None
+        if dev.type not in ("cpu", "cuda") or (dev.type == "cuda" and not torch.cuda.is_available()):
+            raise InputError(f"device {args.device!r} is not usable here (valid: cpu, cuda)")
+        meta = train(cfg, args.output, labels=args.labels, progress=not args.no_progress,
+                     device=args.device, workers=args.workers, labels_only=args.labels_only)
+        if args.labels_only:
+            return 0
     except InputError as e:
         print(f"gtsp-bench: error: {e}", file=sys.stderr)
         return 2

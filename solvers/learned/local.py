@@ -113,6 +113,9 @@ class Walk:
         self.per_m = torch.maximum(w, MIN_EDGE_FRACTION * flight_per_m[self.inst])
         self.omega = env.omega[self.inst]
         self.rows = torch.arange(self.r)
+        #: Clusters of the (sub)problem, for the context's fraction left (a re-constructed
+        #: segment is a problem of its own size).
+        self.size = n_clusters
 
     def view(self) -> View:
         """The view from the current points."""
@@ -148,7 +151,7 @@ class Walk:
         dd = to_depot.norm(dim=-1)
         ctx_vec = torch.stack([to_depot / dd.clamp_min(1e-6)[:, None],
                                to_mass / to_mass.norm(dim=-1).clamp_min(1e-6)[:, None]], 1)
-        ctx_sc = torch.stack([self.omega, n_left / self.n_clusters, torch.log1p(dd / scale)], -1)
+        ctx_sc = torch.stack([self.omega, n_left / self.size, torch.log1p(dd / scale)], -1)
         zero = ~mask
         return View(cand_vec.masked_fill(zero[..., None, None], 0.0).float(),
                     cand_sc.masked_fill(zero[..., None], 0.0).float(), ctx_vec.float(),

@@ -54,6 +54,8 @@ class LearnedSolver:
     """
 
     model_name = ""
+    #: Name of the default policy file (``checkpoints/<name>.pt``); empty: ``model_name``.
+    checkpoint_name = ""
     default_heads = "paper"
 
     def __init__(self, checkpoint: str | None = None, heads: str | None = None, samples: int = 0,
@@ -61,7 +63,8 @@ class LearnedSolver:
         self.heads = check_choice("heads", heads or self.default_heads, tuple(HEAD_RULES))
         self.samples = check_int("samples", samples, 0)
         self.threads = check_int("threads", threads, 1)
-        self.checkpoint = Path(checkpoint) if checkpoint else shipped_checkpoint(self.model_name)
+        self.checkpoint = Path(checkpoint) if checkpoint else shipped_checkpoint(
+            self.checkpoint_name or self.model_name)
         self.augment = check_bool("augment", augment)
         self.reverse = check_bool("reverse", reverse)
         self._model: nn.Module | None = None
@@ -69,7 +72,7 @@ class LearnedSolver:
     @classmethod
     def revision(cls) -> str:
         """A hash of the default checkpoint's bytes (the runner re-solves when it changes)."""
-        return checkpoint_revision(shipped_checkpoint(cls.model_name))
+        return checkpoint_revision(shipped_checkpoint(cls.checkpoint_name or cls.model_name))
 
     @property
     def model(self) -> nn.Module:

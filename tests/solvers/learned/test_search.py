@@ -1,0 +1,89 @@
+"""The local-search solver: feasible tours priced by the evaluator at K = 200, its time cap,
+never below a proven optimum, segments re-decoded in place, bad options refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from gtsp_bench.solvers.learned.checkpoint import save_policy  # noqa: E402
+from gtsp_bench.solvers.learned.env import env_from_instances, optimal_heads_batch  # noqa: E402
+from gtsp_bench.solvers.learned.local import LocalPolicy  # noqa: E402
+from gtsp_bench.solvers.learned.search import LocalSearchSolver, reconstruct  # noqa: E402
+
+from gtsp_bench.energy import evaluate  # noqa: E402
+from gtsp_bench.errors import InputError  # noqa: E402
+from gtsp_bench.generator import instance_set  # noqa: E402
+from gtsp_bench.registry import get_solver, run_solver  # noqa: E402
+
+
+def _tiny(tmp_path):
+    torch.manual_seed(0)
+    model = LocalPolicy(dim=16, n_heads=2, n_layers=1, ff=32, k=6)
+    path = tmp_path / "local.pt"
+    save_policy(model, path)
+    return model, path
+
+
+def test_feasible_at_k200_and_priced_by_the_evaluator(tmp_path):
+    """Through the registry at K = 200: a feasible tour whose objective is the evaluator's."""
+    _, path = _tiny(tmp_path)
+    inst = instance_set(1, 200, 4_343, 6, area=3_000.0)[0]
+    solver = get_solver("local-search", checkpoint=str(path), starts=2, seconds_per_cluster=0.002)
+    result = run_solver(solver, inst, 0.6)
+    assert result.status == "feasible"
+    assert sorted(result.order) == list(range(200))
+    assert result.objective == pytest.approx(
+        evaluate(inst, 0.6, result.order, result.heads).objective, rel=1e-12)
+
+
+def test_no_round_starts_past_the_budget(tmp_path):
+    """The budget is seconds_per_cluster * K, or the time limit where smaller; a spent budget
+    starts no re-construction round (the multi-start tour is the answer)."""
+    _, path = _tiny(tmp_path)
+    inst = instance_set(1, 30, 4_343, 6)[0]
+    spent = LocalSearchSolver(checkpoint=str(path), seconds_per_cluster=1e-9).solve(inst, 0.3)
+    assert spent.stats["rounds"] == 0 and spent.stats["budget_s"] == pytest.approx(30e-9)
+    capped = LocalSearchSolver(checkpoint=str(path)).solve(inst, 0.3, time_limit=1e-9)
+    assert capped.stats["rounds"] == 0 and capped.stats["budget_s"] == 1e-9
+
+
+def test_never_below_a_proven_optimum():
+    """The shipped policy's search on tiny instances: never below dp's proven optimum."""
+    exact = get_solver("dp")
+    search = get_solver("local-search", seconds_per_cluster=0.02)
+    for inst in instance_set(4, 5, 4_343, 8):
+        for omega in (0.0, 0.6):
+            opt = run_solver(exact, inst, omega).objective
+            got = run_solver(search, inst, omega).objective
+            assert got >= opt - 1e-9 * opt
+
+
+def test_reconstruct_keeps_the_rest_of_the_tour(tmp_path):
+    """Each re-decoded tour is a permutation that keeps every cluster outside its segment in
+    place, forwards and backwards."""
+    model, _ = _tiny(tmp_path)
+    inst = instance_set(1, 20, 4_343, 6)[0]
+    env = env_from_instances([inst], [0.3])
+    order = torch.randperm(20, generator=torch.Generator().manual_seed(1))
+    heads = optimal_heads_batch(env, order[None])[0][0]
+    starts = np.array([0, 3, 12, 15])
+    with torch.inference_mode():
+        out = reconstruct(model, env, order, heads, starts, 5, np.array([False, True, False, True]),
+                          torch.Generator().manual_seed(0))
+    assert out.shape == (4, 20)
+    for row, a in zip(out, starts, strict=True):
+        assert sorted(row.tolist()) == list(range(20))
+        keep = np.r_[0:a, a + 5:20]
+        assert torch.equal(row[keep], order[keep])
+        assert sorted(row[a:a + 5].tolist()) == sorted(order[a:a + 5].tolist())
+
+
+def test_bad_options_are_refused_with_the_valid_names():
+    with pytest.raises(InputError, match="options: checkpoint, starts"):
+        get_solver("local-search", bogus=1)
+    for bad in ({"width": 0}, {"seconds_per_cluster": -1.0}, {"max_segment": 1}, {"ls": "maybe"}):
+        with pytest.raises(InputError):
+            LocalSearchSolver(**bad)
