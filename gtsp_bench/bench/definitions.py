@@ -215,6 +215,17 @@ class Benchmark:
 
 _HEURISTICS = ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp")
 _PEERS_TABLE = (*_HEURISTICS, "ortools", "lkh")
+#: The wider local-view policy trained on a GPU (recipe ``local-gpu-l3``), a shipped file.
+_L3 = "solvers/learned/checkpoints/local-l3.pt"
+#: GTSPLIB's planar (EUC_2D) files of GLNS's 45: the transfer benchmark's distance-only problems.
+_GLNS45_PLANAR = (
+    "31pr152", "32u159", "39rat195", "40d198", "40kroa200", "40krob200", "45ts225", "45tsp225",
+    "46pr226", "53gil262", "53pr264", "56a280", "60pr299", "64lin318", "80rd400", "84fl417",
+    "88pr439", "89pcb442", "99d493", "115rat575", "115u574", "131p654", "132d657", "145u724",
+    "157rat783", "201pr1002", "212u1060", "217vm1084",
+)
+_TRANSFER_SETS = ("uav-K50-N10-s1", "uav-K50-N40-s1", "uav-K100-N10-s1", "uav-K100-N40-s1",
+                  "uav-K50-N20-a1100-s21", "uav-K50-N20-a3000-s22")
 #: The learned benchmark's runs: each policy at every K; its variants (the paper's head rule,
 #: reversal, sampling, augmentation, multi-start) at the generated K <= 10 only.
 _LEARNED = (
@@ -230,6 +241,8 @@ _LEARNED = (
     run("local"),
     run("local", "local heads=paper", max_k=10, heads="paper"),
     run("local", "local starts=8", max_k=10, starts=8),
+    run("local", "local policy=l3", checkpoint=_L3),
+    run("local-search"),
 )
 _LARGE_UAV = tuple(f"uav-K{k}-N20-s1" for k in (20, 50, 100, 200))
 _TABLE_GROUPS = (
@@ -328,6 +341,23 @@ BENCHMARKS: dict[str, Benchmark] = {
             outputs=("doc-learned",),
             rough_time="25 min",
             quick={"sources": (Generated((4, 7), 20, seed=5000),), "repeats": 1, "outputs": ()},
+        ),
+        Benchmark(
+            "learned-transfer",
+            "the local policies off their training distribution (N = 10 and 40 per cluster, "
+            "denser and sparser areas, GTSPLIB's planar GLNS files as distance-only problems): "
+            "one greedy decode against lns to convergence or GTSPLIB's best known",
+            (Committed(_TRANSFER_SETS), Gtsplib(names=_GLNS45_PLANAR)),
+            (run("local"), run("local", "local policy=l3", checkpoint=_L3),
+             run("lns", "lns (reference)", max_k=100, stop_at_convergence=True)),
+            omegas=(0.3, 0.6),
+            budget=Budget(None),
+            batched=True,
+            outputs=("doc-learned-transfer",),
+            jobs=1,
+            rough_time="10 min",
+            quick={"sources": (Committed(("uav-K50-N10-s1",), instances=2),
+                               Gtsplib(names=("40kroa200",))), "outputs": ()},
         ),
         Benchmark(
             "glns",

@@ -6,7 +6,7 @@ rows alone: ``(benchmark, rows, out_dir, settings, say) -> files written``.
 ``glns``
     ``glns.md``: per instance, lns's mean gap, hits and worst run beside GLNS's published numbers
     (``glns-45.csv``), and the three target lines;
-``doc-heuristics``, ``doc-learned``, ``doc-exact-scale``, ``doc-textbook``
+``doc-heuristics``, ``doc-learned``, ``doc-learned-transfer``, ``doc-exact-scale``, ``doc-textbook``
     a generated block of a documentation page (:data:`DOC_BLOCKS`), refreshed only when the run
     wrote into the committed folder ``results/NAME`` of a checkout (``docs/`` beside it);
 ``update-references``
@@ -176,6 +176,16 @@ def learned_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     )
 
 
+def transfer_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
+    """The learned page's transfer table: a line per set, a column per solver."""
+    return (
+        f"{_made_by(bench, df, command)}\n\n"
+        f"{pivot_markdown(df, 'set', 'label', lambda g: gap_time_cell(g, ms=True), 'set')}\n\n"
+        "Cells: mean gap to the reference (the UAV sets: the best tour of the benchmark, `lns` "
+        "to convergence; GTSPLIB: `best_known.csv`) / milliseconds per instance."
+    )
+
+
 def exact_scale_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The exact page's table at scale: a line per set, a column per solver."""
     return (
@@ -200,6 +210,7 @@ def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
 DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
     "doc-heuristics": ("docs/solvers/heuristics.md", "heuristics-table", heuristics_block),
     "doc-learned": ("docs/solvers/learned.md", "learned-table", learned_block),
+    "doc-learned-transfer": ("docs/solvers/learned.md", "learned-transfer-table", transfer_block),
     "doc-exact-scale": ("docs/solvers/exact.md", "exact-scale-table", exact_scale_block),
     "doc-textbook": ("docs/solvers/exact.md", "textbook-table", textbook_block),
 }

@@ -87,3 +87,34 @@ def test_bad_settings(capsys):
     assert main(["--recipe", "nope", "-o", "x.pt"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("gtsp-bench: error: ") and "\n" not in err
+
+
+def test_workers_give_the_same_labels_and_states():
+    """Labels solved and states walked in two forked processes equal those of one process."""
+    from gtsp_bench.solvers.learned.imitation import build_samples, label_set, solve_labels
+
+    insts, omegas = label_set(6, 4, 1000.0, 71_000, 6, 0.9)
+    one, v1 = solve_labels(insts, omegas)
+    two, v2 = solve_labels(insts, omegas, workers=2)
+    assert (one == two).all() and (v1 == v2).all()
+    cfg = get_recipe("local-small", mix=((6, 4, 1000.0),), nodes=6)
+    a, _ = build_samples(cfg, {(6, 4, 1000.0): one}, 4)
+    b, _ = build_samples(cfg, {(6, 4, 1000.0): one}, 4,
+                         pool=__import__("multiprocessing").get_context("fork").Pool(2))
+    assert torch.equal(a.cand_vec, b.cand_vec) and torch.equal(a.target, b.target)
+
+
+def test_bad_device_or_workers_is_one_line(capsys):
+    for args in (["--device", "nope"], ["--workers", "0"]):
+        assert main(["--recipe", "local-small", *args, "-o", "x.pt"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("gtsp-bench: error: ") and "\n" not in err
+
+
+def test_gpu_recipes_record_their_command():
+    """The GPU recipes' command line names the device and the workers it ran with."""
+    cfg = get_recipe("local-gpu-l3", seed=2)
+    assert cfg.command("p.pt", "cuda", 15) == (
+        "python -m gtsp_bench.solvers.learned.imitation --recipe local-gpu-l3 --max-time 165 "
+        "--seed 2 --device cuda --workers 15 -o p.pt")
+    assert cfg.model_options == {"dim": 96, "n_layers": 3, "ff": 192}
