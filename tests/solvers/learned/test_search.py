@@ -87,3 +87,17 @@ def test_bad_options_are_refused_with_the_valid_names():
     for bad in ({"width": 0}, {"seconds_per_cluster": -1.0}, {"max_segment": 1}, {"ls": "maybe"}):
         with pytest.raises(InputError):
             LocalSearchSolver(**bad)
+
+
+def test_shipped_policy_loads_on_the_cpu_and_a_wrong_file_is_one_line(tmp_path):
+    """The default policy file (local-l3.pt) loads on the CPU; an am file is refused in one line."""
+    from gtsp_bench.solvers.learned.am import AttentionPolicy
+
+    model = LocalSearchSolver().model
+    assert model.config["dim"] == 96 and next(model.parameters()).device.type == "cpu"
+    am = tmp_path / "am.pt"
+    save_policy(AttentionPolicy(dim=16, n_heads=2, n_layers=1, ff=16), am)
+    inst = instance_set(1, 5, 4_343, 6)[0]
+    with pytest.raises(InputError, match="holds a 'am' model, not 'local'") as err:
+        LocalSearchSolver(checkpoint=str(am)).solve(inst, 0.3)
+    assert "\n" not in str(err.value)
