@@ -339,7 +339,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             batched=True,
             repeats=3,
             outputs=("doc-learned",),
-            rough_time="25 min",
+            rough_time="45 min",
             quick={"sources": (Generated((4, 7), 20, seed=5000),), "repeats": 1, "outputs": ()},
         ),
         Benchmark(
