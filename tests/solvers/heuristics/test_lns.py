@@ -22,6 +22,8 @@ from tests.tiny_cases import tiny_asymmetric_case, tiny_case
 
 #: lns that stops when its trials are done instead of using the whole time limit.
 CONVERGE = {"stop_at_convergence": True}
+#: lns that uses the whole time limit (the fixed-budget benchmarks' runs).
+BUDGET = {"effort": "budget"}
 
 
 @pytest.mark.parametrize("depot", [True, False])
@@ -101,10 +103,11 @@ def test_stop_at_convergence_stops_after_its_trials():
 
 
 def test_uses_the_time_limit_when_converged():
-    """Without stop_at_convergence, the same settings go on with more trials until the limit, and
+    """With effort budget, the same settings go on with more trials until the limit, and
     the run still counts as converged (status feasible)."""
     inst = generate_instance(12, 4, seed=3)
-    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2), inst, 0.5, time_limit=1.0)
+    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2, **BUDGET), inst, 0.5,
+                   time_limit=1.0)
     assert r.status == "feasible"
     assert r.stats["converged"] is True
     assert r.stats["trials"] > 2
@@ -186,11 +189,11 @@ def test_bad_options_rejected(options, message):
 
 
 def test_time_limited_defaults_cool_each_trial_fully():
-    """Without stop_at_convergence a trial runs all its iterations (no patience) from a hotter
+    """With effort budget a trial runs all its iterations (no patience) from a hotter
     start; given values win in both modes."""
-    s = LnsSettings()
+    s = LnsSettings(**BUDGET)
     assert s.patience_for(41) == s.iterations_for(41) == 1025 and s.hottest == 1.0
-    given = LnsSettings(patience=7, start_temperature=0.5)
+    given = LnsSettings(patience=7, start_temperature=0.5, **BUDGET)
     assert given.patience_for(41) == 7 and given.hottest == 0.5
     with pytest.raises(InputError, match="must not exceed"):
         LnsSettings(end_temperature=0.5, stop_at_convergence=True)
@@ -258,8 +261,10 @@ def test_fitted_trials_fill_a_short_budget():
     """A time-limited run whose trials would not fit its budget makes at least several shorter
     ones (the fitted length), and more with a larger fit_trials."""
     inst = generate_instance(14, 4, seed=6)
-    few = run_solver(get_solver("lns", iterations=10**6, fit_trials=1), inst, 0.4, seed=1, time_limit=0.4)
-    many = run_solver(get_solver("lns", iterations=10**6, fit_trials=64), inst, 0.4, seed=1, time_limit=0.4)
+    few = run_solver(get_solver("lns", iterations=10**6, fit_trials=1, **BUDGET), inst, 0.4, seed=1,
+                     time_limit=0.4)
+    many = run_solver(get_solver("lns", iterations=10**6, fit_trials=64, **BUDGET), inst, 0.4, seed=1,
+                      time_limit=0.4)
     assert few.stats["trials"] <= 2 < 10 <= many.stats["trials"]
 
 
@@ -270,7 +275,7 @@ def test_large_cycles_fit_only_whole_trials():
     (One thread: islands each end a trial at the exchange too.)"""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", fit_trials=64, workers=1), inst, 0.5, seed=1, time_limit=3.0)
+    r = run_solver(get_solver("lns", fit_trials=64, workers=1, **BUDGET), inst, 0.5, seed=1, time_limit=3.0)
     assert r.stats["iterations"] >= 25 * (n + 1) * (r.stats["trials"] - 1)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
