@@ -1,6 +1,8 @@
-"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, budget, options.
+"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, budget, options,
+effort presets.
 
-Most runs use ``stop_at_convergence`` (the old behaviour: stop after the trials) to stay fast.
+Most runs use ``stop_at_convergence`` (effort ``fast``: stop after three trials) to stay fast;
+those that test the use of a whole time limit say effort ``budget``.
 """
 
 from __future__ import annotations
@@ -8,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
@@ -413,3 +415,56 @@ def test_lns_warm_start():
     again = run_solver("lns", inst, 0.4, time_limit=30.0, seed=3, initial=proven)
     assert (again.order, again.heads, again.objective) == (r.order, r.heads, r.objective)
     assert again.runtime_s < 1.0 and again.stats["warm_start"] == "at its lower bound"
+
+
+@pytest.mark.parametrize("effort", list(EFFORTS))
+def test_effort_presets_set_the_stopping_rule(effort):
+    """Each preset: whether the search stops after its trials, how many, when a cold restart
+    comes; explicitly given trials and restart_after win over the preset's."""
+    s = LnsSettings(effort=effort)
+    preset = EFFORTS[effort]
+    assert s.preset == preset and s.stops == (effort != "budget")
+    assert (s.trial_count, s.cold_after) == (preset.trials, preset.restart_after)
+    given = LnsSettings(effort=effort, trials=5, restart_after=0)
+    assert (given.trial_count, given.cold_after) == (5, 0)
+
+
+def test_effort_defaults_and_the_old_switch():
+    """The default effort is ``default``; stop_at_convergence true is ``fast`` (the paper's runs),
+    false is ``budget``; both at once is refused."""
+    assert LnsSettings().preset == EFFORTS["default"] and LnsSettings().stops
+    assert LnsSettings(stop_at_convergence=True).preset == EFFORTS["fast"]
+    assert LnsSettings(stop_at_convergence=False).preset == EFFORTS["budget"]
+    with pytest.raises(InputError, match="give effort or stop_at_convergence, not both"):
+        LnsSettings(effort="fast", stop_at_convergence=True)
+
+
+def test_unknown_effort_lists_the_presets():
+    """A misspelt preset is refused with the valid names."""
+    valid = "'fast', 'default', 'slow', 'budget'"
+    with pytest.raises(InputError, match=f"effort must be one of {valid}, got 'quick'"):
+        get_solver("lns", effort="quick")
+
+
+@pytest.mark.parametrize("effort", ["fast", "default", "slow"])
+def test_stopping_efforts_end_on_their_own(effort):
+    """On 11berlin52 (proven optimum 4040) the presets that stop end after their trials, long
+    before a 600 s cap (status feasible, converged), never below the optimum; the same seed gives
+    the same run."""
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
+    solver = get_solver("lns", effort=effort)
+    r = run_solver(solver, inst, None, seed=4, time_limit=600)
+    assert r.status == "feasible" and r.stats["converged"] is True
+    assert r.stats["trials"] == EFFORTS[effort].trials
+    assert r.objective >= 4040 - 1e-9 * 4040
+    again = run_solver(solver, inst, None, seed=4, time_limit=600)
+    assert (again.order, again.heads, again.stats["iterations"]) == (r.order, r.heads, r.stats["iterations"])
+
+
+def test_without_a_time_limit_every_effort_stops():
+    """Called directly with no time limit, lns stops after its trials whatever its effort (the
+    default limit is the harness's, run_solver's, to give)."""
+    inst = generate_instance(9, 3, seed=4)
+    for effort in EFFORTS:
+        sol = get_solver("lns", effort=effort, iterations=50).solve(inst, 0.5, seed=1)
+        assert sol.status == "feasible" and sol.stats["converged"] is True, effort
