@@ -353,15 +353,29 @@ BENCHMARKS: dict[str, Benchmark] = {
         ),
         Benchmark(
             "glns-large",
-            "lns on the symmetric GTSPLIB files of 1,000-15,112 nodes at 60 s, gap to GLKH's tours",
+            "lns on the 41 symmetric GTSPLIB files of 1,000-15,112 nodes at 60 s (3 seeds), gap to "
+            "the best known (GLKH's tours)",
             (Gtsplib(min_nodes=1_000, max_nodes=15_112),),
             (LNS_BUDGET,),
-            seeds=(1,),
+            seeds=(1, 2, 3),
             budget=Budget(60.0),
             outputs=("anytime", "best-known"),
             jobs=1,
-            rough_time="45 min",
+            rough_time="2 h 10 min on one core",
             quick={"sources": (Gtsplib(("235pcb1173",)),), "budget": Budget(10.0)},
+        ),
+        Benchmark(
+            "lns-effort",
+            "lns's effort presets that stop on their own (fast, default, slow) on GLNS's 45 files, "
+            "60 s a cap: gap and time to stop",
+            (Gtsplib(group="glns-45", symmetric_only=False),),
+            tuple(run("lns", f"lns effort={e}", effort=e) for e in ("fast", "default", "slow")),
+            seeds=(1,),
+            budget=Budget(60.0),
+            outputs=("best-known",),
+            jobs=1,
+            rough_time="15 min on one core",
+            quick={"sources": (Gtsplib(("11berlin52", "40d198")),)},
         ),
         Benchmark(
             "exact-scale",
