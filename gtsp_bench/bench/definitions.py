@@ -348,7 +348,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             budget=Budget(factor=0.5, of="glns"),
             outputs=("glns", "best-known"),
             jobs=1,
-            rough_time="45 min",
+            rough_time="25 min on one core",
             quick={"sources": (Gtsplib(("31pr152", "40d198", "64lin318")),), "seeds": (1,)},
         ),
         Benchmark(
