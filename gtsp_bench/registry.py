@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 from typing import Any
 
-from gtsp_bench.checks import check_omega, check_seed, check_time_limit, is_number
+from gtsp_bench.checks import check_omega, check_seed, check_time_limit, default_time_limit, is_number
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError, InputError, SolverError
 from gtsp_bench.instance import Instance
@@ -42,6 +42,7 @@ from gtsp_bench.solver import (
     Solver,
     TrajectoryPoint,
     handles_asymmetric,
+    is_capped,
     solves_batches,
     takes_keyword,
 )
@@ -397,7 +398,8 @@ def run_solver(
     omega
         Weight of the ground energy in [0, 1] (ignored for distance-only instances).
     time_limit
-        Seconds (``None``: the solver's default).
+        Seconds (``None``: :func:`gtsp_bench.checks.default_time_limit` for a solver that declares
+        ``capped = True``, else the solver's own rule).
     seed
         Random seed.
     name
@@ -425,6 +427,8 @@ def run_solver(
     name = name or type(solver).__name__
     w = check_omega(omega) if instance.is_uav else None
     time_limit = check_time_limit(time_limit)
+    if time_limit is None and is_capped(solver):
+        time_limit = default_time_limit(instance.n_clusters)
     check_seed(seed)
     check_capability(solver, name, instance)
     extra: dict[str, Any] = {}

@@ -2,11 +2,16 @@
 
 A solver is any class with a ``solve`` method (the :class:`Solver` protocol) returning a
 :class:`Solution`; :func:`gtsp_bench.registry.run_solver` checks and re-prices it into a
-:class:`Result`. Three optional parts of a solver class are declared here, not guessed:
+:class:`Result`. Four optional parts of a solver class are declared here, not guessed:
 
 ``asymmetric = True``
     a class attribute: the solver prices a tour in its direction and may be given asymmetric
     instances (:func:`handles_asymmetric`; absent means ``False``);
+``capped = True``
+    a class attribute: the solver searches until a time limit (or, lns, stops when done, the
+    limit a cap); given none, :func:`gtsp_bench.registry.run_solver` gives it the default one,
+    :func:`gtsp_bench.checks.default_time_limit` (:func:`is_capped`; absent means ``False``:
+    ``None`` reaches the solver);
 ``revision()``
     a class method returning a short tag of the data the solver's answers depend on besides its
     code (a learned policy's weights); benchmarks put it in their task keys
@@ -250,7 +255,15 @@ def handles_asymmetric(solver: object) -> bool:
     return vars(cls).get("asymmetric", False) is True
 
 
+def is_capped(solver: object) -> bool:
+    """Whether a solver (object or class) declares ``capped = True``: given no time limit, it is
+    given :func:`gtsp_bench.checks.default_time_limit`."""
+    cls = solver if inspect.isclass(solver) else type(solver)
+    return getattr(cls, "capped", False) is True
+
+
 __all__ = [
     "REL_TOL", "STATUSES", "BatchSolver", "Progress", "Result", "Solution", "Solver",
-    "TrajectoryPoint", "handles_asymmetric", "no_progress", "solves_batches", "takes_keyword",
+    "TrajectoryPoint", "handles_asymmetric", "is_capped", "no_progress", "solves_batches",
+    "takes_keyword",
 ]

@@ -102,6 +102,32 @@ def test_harness_checks_omega_and_time_limit(tiny):
             run_solver(Fixed(), tiny, 0.5, seed=seed)
 
 
+class Capped(Fixed):
+    """A test solver that declares ``capped`` and records the time limit it was given."""
+
+    capped = True
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        self.given = time_limit
+        return super().solve(instance, omega, time_limit=time_limit, seed=seed)
+
+
+def test_the_default_time_limit_is_given_in_one_place(tiny):
+    """run_solver gives a solver that declares ``capped`` the default time limit when none is
+    given, a given one unchanged; a solver without the declaration gets ``None``; lns and the
+    peers that search until a limit declare it."""
+    from gtsp_bench.checks import default_time_limit
+    from gtsp_bench.solver import is_capped
+
+    capped = Capped()
+    run_solver(capped, tiny, 0.5)
+    assert capped.given == default_time_limit(tiny.n_clusters)
+    run_solver(capped, tiny, 0.5, time_limit=3)
+    assert capped.given == 3
+    assert is_capped(Capped) and not is_capped(Fixed)
+    assert is_capped(get_solver("lns")) and not is_capped(get_solver("dp"))
+
+
 def test_result_json_shape(tiny):
     """to_dict has exactly the CLI's keys."""
     d = run_solver(Fixed(), tiny, 0.5).to_dict()

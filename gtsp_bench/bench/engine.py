@@ -27,6 +27,7 @@ from gtsp_bench.bench.definitions import (
     Generated,
     Gtsplib,
     Run,
+    fixed_budget,
     get_benchmark,
 )
 from gtsp_bench.bench.execute import Folder, Outcome, _say, execute
@@ -91,8 +92,8 @@ def _select_runs(bench: Benchmark, given: Sequence[str]) -> tuple[Run, ...]:
     for want in given:
         mine = [r for r in bench.runs if r.name == want or r.solver == want or r.name.startswith(want + " ")]
         if not mine:
-            if want in solver_names():
-                mine = [Run(want)]
+            if want in solver_names():  # lns uses the budget, as in the benchmarks that list it
+                mine = [fixed_budget(want) if bench.budget.seconds or bench.budget.factor else Run(want)]
             else:
                 valid = ", ".join(dict.fromkeys(r.name for r in bench.runs))
                 raise InputError(

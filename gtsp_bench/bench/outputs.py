@@ -208,8 +208,8 @@ def render(
 
     written: list[Path] = []
     names = list(bench.outputs)
-    if getattr(settings, "update_reference", False) and "update-references" not in names:
-        names.append("update-references")  # --update-reference works on any benchmark
+    if getattr(settings, "update_reference", False):  # --update-reference works on any benchmark
+        names += [n for n in ("update-references", "best-known") if n not in names]
     for name in names:
         written += OUTPUTS[name](bench, df, out_dir, settings, say)
     return written

@@ -179,8 +179,8 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
     for label, r in picked:
         path = gtsplib.path(r.name)
         inst, text, digest = read_set_file(SetFile(path, r.name))
-        source = "Fischetti et al. 1997; GLKH tour" if r.proven else "GLKH"
-        ref = ReferenceRow(r.name, None, r.value, None, r.status, source, "")
+        source = "Fischetti et al. 1997; GLKH tour" if r.proven else r.source or "GLKH"
+        ref = ReferenceRow(r.name, None, r.value, None, r.status, source, r.date)
         out.append(
             Entry(label, r.name, StoredInstance(inst, text, digest, path), {None: ref}, glns.get(r.name))
         )

@@ -1,4 +1,4 @@
-"""The GTSPLIB benchmark library by name: instances, GLKH's best tours and reference values.
+"""The GTSPLIB benchmark library by name: instances, the best-known tours and reference values.
 
 The library (143 instances, see ``instances/gtsplib/README.md``) is a folder of the source
 repository, ``instances/gtsplib/``, not package data: an installed wheel does not hold it. The
@@ -18,12 +18,13 @@ import csv
 import difflib
 import io
 import os
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
-from gtsp_bench.data.io import read_instance, read_tour
+from gtsp_bench.data.io import atomic_write_text, read_instance, read_tour, write_tour
+from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 
@@ -53,7 +54,8 @@ class Reference:
     clusters, nodes
         Its size.
     value
-        The best-known objective: the length of GLKH's best tour.
+        The best-known objective: the length of :attr:`tour` (GLKH's best, or a shorter one
+        kept since by :func:`keep_tour`).
     status
         ``"optimal"`` (a proven optimum: the symmetric instances up to 442 nodes, Fischetti et al.
         1997) or ``"best_known"`` (the best tour found, not proven optimal).
@@ -196,7 +198,7 @@ def path(name: str) -> Path:
 
 
 def tour_path(name: str) -> Path:
-    """GLKH's best tour file of ``name``."""
+    """The best-known tour file of ``name`` (:attr:`Reference.tour`)."""
     return folder() / _reference(name).tour
 
 
@@ -206,5 +208,43 @@ def read(name: str) -> Instance:
 
 
 def best_tour(name: str, instance: Instance | None = None) -> tuple[list[int], list[int]]:
-    """GLKH's best tour of ``name`` as ``(order, heads)`` of ``instance`` (default: read it)."""
+    """The best-known tour of ``name`` (GLKH's, or a better one kept since, :func:`keep_tour`) as
+    ``(order, heads)`` of ``instance`` (default: read it)."""
     return read_tour(tour_path(name), read(name) if instance is None else instance)
+
+
+def keep_tour(where: Path, name: str, order: Sequence[int], heads: Sequence[int], source: str,
+              date: str) -> Reference | None:
+    """Keep a tour of ``name`` that is shorter than its ``best_known`` value: write it to
+    ``where/tours/NAME.LENGTH.tour.gz`` and point its row of ``where/best_known.csv`` at it (the
+    value, tour, ``source`` and ``date``; the status and certificate unchanged), both atomically.
+
+    The tour is priced here by the evaluator on the library's file, whatever its finder claimed.
+    The earlier tour file stays (git keeps who found what). Returns the new row, or ``None`` when
+    the tour is not shorter (or the row is a proven optimum that it meets).
+
+    Raises
+    ------
+    InputError
+        An unknown name, an infeasible tour, or one shorter than a proven optimum (the solver or
+        the table is wrong).
+    """
+    table_path = where / "best_known.csv"
+    table = parse_best_known(table_path.read_text(encoding="utf-8"))
+    if name not in table:
+        raise InputError(f"{table_path}: no instance {name!r}")
+    ref = table[name]
+    inst = read_instance(where / f"{name}.gtsp.gz")
+    length = evaluate(inst, None, order, heads).objective
+    if not length < ref.value - 1e-9 * max(1.0, abs(ref.value)):
+        return None
+    if ref.proven:
+        raise InputError(f"{name}: a tour of length {length!r} lies below the proven optimum "
+                         f"{ref.value!r}; the solver or the table is wrong")
+    value = int(length) if float(length).is_integer() else length
+    tour = f"tours/{name}.{value}.tour.gz"
+    write_tour(inst, where / tour, order, heads, [f"Length = {value}", f"Found by {source} {date}"])
+    table[name] = replace(ref, value=float(length), tour=tour, source=source, date=date)
+    atomic_write_text(table_path, format_best_known(table.values()))
+    _best_known.cache_clear()
+    return table[name]

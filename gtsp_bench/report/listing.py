@@ -33,7 +33,9 @@ def _solvers(bench: Benchmark) -> str:
     labels = []
     for r in bench.runs:
         label = f"`{r.name}`"
-        labels.append(label + (f" (K <= {r.max_k})" if r.max_k is not None else ""))
+        hidden = [f"{k}={v}" for k, v in r.options if f"{k}=" not in r.name]  # options the label hides
+        notes = [*hidden, *([f"K <= {r.max_k}"] if r.max_k is not None else [])]
+        labels.append(label + (f" ({', '.join(notes)})" if notes else ""))
     return ", ".join(labels)
 
 

@@ -16,10 +16,11 @@ from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re
 (:mod:`gtsp_bench.solvers.heuristics.lns_islands`) apply. ``docs/solvers/heuristics.md`` (lns)
 describes every option and the measurements behind the defaults.
 
-The search has converged after ``trials`` trials. It then goes on with more trials until the time
-limit (status ``feasible``), unless ``stop_at_convergence`` asks it to stop there; a search that
-uses its time limit fits its trials to it (``fit_to_time``, ``fit_trials``). A run that converges
-is reproducible for a seed; one cut by the time limit before it converged has status
+The search has converged after ``trials`` trials. How it ends is its ``effort``
+(:mod:`gtsp_bench.solvers.heuristics.lns_settings`): ``fast``, ``default`` and ``slow`` stop
+there, the time limit only a cap; ``budget`` goes on with more trials until the time limit
+(status ``feasible``) and fits its trials to it (``fit_to_time``, ``fit_trials``). A run that
+converges is reproducible for a seed; one cut by the time limit before it converged has status
 ``time_limit``.
 """
 
@@ -33,7 +34,7 @@ import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
-from gtsp_bench.solvers.heuristics.lns_islands import default_workers, run_islands
+from gtsp_bench.solvers.heuristics.lns_islands import run_islands
 from gtsp_bench.solvers.heuristics.lns_macro import (
     centre_groups,
     centre_order,
@@ -41,24 +42,18 @@ from gtsp_bench.solvers.heuristics.lns_macro import (
     macro_tour,
 )
 from gtsp_bench.solvers.heuristics.lns_paths import Regions, region_passes
+from gtsp_bench.solvers.heuristics.lns_settings import EFFORTS, LARGE, Effort, LnsSettings
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
-from gtsp_bench.checks import (
-    check_bool,
-    check_float,
-    check_int,
-    time_limit_or_default,
-)
-from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.solver import Progress, Solution, no_progress
 
+__all__ = ["EFFORTS", "LARGE", "Effort", "Lns", "LnsSettings"]
+
 REMOVALS, INSERTIONS, REL_TOL = kernels.REMOVALS, kernels.INSERTIONS, kernels.REL_TOL
 #: A trial that does not improve the best tour doubles the next one's temperatures, up to this factor.
 MAX_HEAT = 8.0
-#: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
-LARGE = 400
 #: With ``fit_trials``, a trial still runs at least this many iterations per cluster (up to
 #: ``LARGE`` clusters; above, its whole ``iterations``: there an annealing run of 10 iterations per
 #: cluster ended about where it began, and longer ones went further).
@@ -67,149 +62,6 @@ FIT_FLOOR = 10
 CHUNK_SECONDS = 0.01
 #: Iterations of a raced start's short trial between two looks at the clock.
 RACE_CHUNK = 200
-
-
-@dataclass(frozen=True)
-class LnsSettings:
-    """Validated settings of :class:`Lns` (see there)."""
-
-    iterations: int | None = None
-    trials: int = 3
-    patience: int | None = None
-    remove_fraction: float = 0.3
-    max_removals: int | None = None
-    start_temperature: float | None = None
-    end_temperature: float = 0.003
-    reaction: float = 0.1
-    noise: float = 0.1
-    neighbours: int | None = None
-    stop_at_convergence: bool = False
-    restart_after: int = 2
-    reopt_window: int | None = None
-    fit_to_time: bool = True
-    fit_trials: int = 32
-    points: bool | None = None
-    quadrants: bool | None = None
-    macro: bool = False
-    macro_iterations: int = 5
-    macro_groups: float = 5.0
-    starts: int = 1
-    start_iterations: int = 5
-    paths: float = 0.3
-    path_clusters: int = 80
-    path_iterations: int = 5
-    fail_passes: int = 0
-    workers: int | None = None
-    exchange: float = 0.5
-
-    def __post_init__(self) -> None:
-        if self.iterations is not None:
-            check_int("iterations", self.iterations, 1)
-        check_int("trials", self.trials, 1)
-        if self.patience is not None:
-            check_int("patience", self.patience, 1)
-        check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
-        if self.max_removals is not None:
-            check_int("max_removals", self.max_removals, 1)
-        check_bool("stop_at_convergence", self.stop_at_convergence)
-        if self.start_temperature is not None:
-            check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
-        check_float("end_temperature", self.end_temperature, 0.0, math.inf, open_low=False)
-        if self.end_temperature > self.hottest:
-            raise InputError(
-                f"end_temperature ({self.end_temperature!r}) must not exceed start_temperature "
-                f"({self.hottest!r})"
-            )
-        check_float("reaction", self.reaction, 0.0, 1.0)
-        check_float("noise", self.noise, 0.0, math.inf, open_low=False)
-        if self.neighbours is not None:
-            check_int("neighbours", self.neighbours, 1)
-        check_int("restart_after", self.restart_after, 0)
-        if self.reopt_window is not None:
-            check_int("reopt_window", self.reopt_window, 0)
-        check_bool("fit_to_time", self.fit_to_time)
-        check_int("fit_trials", self.fit_trials, 1)
-        if self.points is not None:
-            check_bool("points", self.points)
-        if self.quadrants is not None:
-            check_bool("quadrants", self.quadrants)
-        check_bool("macro", self.macro)
-        check_int("macro_iterations", self.macro_iterations, 0)
-        check_float("macro_groups", self.macro_groups, 0.0, math.inf, open_low=False)
-        check_int("starts", self.starts, 1)
-        check_int("start_iterations", self.start_iterations, 1)
-        check_float("paths", self.paths, 0.0, 1.0, open_low=False)
-        check_int("path_clusters", self.path_clusters, 2)
-        check_int("path_iterations", self.path_iterations, 0)
-        check_int("fail_passes", self.fail_passes, 0)
-        if self.workers is not None:
-            check_int("workers", self.workers, 1)
-        check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
-
-    @property
-    def hottest(self) -> float:
-        """The start temperature (default 0.3 with ``stop_at_convergence``, else 1.0: a search that
-        uses its whole time limit can afford to wander further before it cools)."""
-        if self.start_temperature is not None:
-            return self.start_temperature
-        return 0.3 if self.stop_at_convergence else 1.0
-
-    def iterations_for(self, n: int) -> int:
-        """Iterations per trial for a cycle of ``n`` clusters (default ``max(100, 25 n)``)."""
-        return self.iterations if self.iterations is not None else max(100, 25 * n)
-
-    def neighbours_for(self, n: int, symmetric: bool) -> int:
-        """Neighbour-list length for ``n`` clusters (default 10 on symmetric costs; on directed
-        costs every other cluster: there the nearest clusters, by the cheapest arc either way, say
-        little about where a cluster fits)."""
-        if self.neighbours is not None:
-            return self.neighbours
-        return 10 if symmetric else max(1, n - 1)
-
-    def quadrants_for(self, n: int) -> bool:
-        """Whether the neighbour lists of ``n`` clusters take the nearest in each quadrant
-        (default: above ``LARGE`` clusters)."""
-        return self.quadrants if self.quadrants is not None else n > LARGE
-
-    def max_removals_for(self, n: int) -> int:
-        """Most clusters removed in one iteration for ``n`` clusters (default 100 up to
-        ``LARGE`` clusters, 25 above: there an iteration's insertion and local search grow with
-        the removals, and many small iterations did better in a fixed time)."""
-        if self.max_removals is not None:
-            return self.max_removals
-        return 100 if n <= LARGE else 25
-
-    def reopt_window_for(self, n: int) -> int:
-        """Half-width of an iteration's windowed re-opt for ``n`` clusters (default 0, the full
-        re-opt, up to ``LARGE`` clusters; 4 above: there a full re-opt per local search round cost
-        more than the rest of the iteration)."""
-        if self.reopt_window is not None:
-            return self.reopt_window
-        return 0 if n <= LARGE else 4
-
-    def path_share_for(self, n: int, symmetric: bool, timed: bool) -> float:
-        """The share of the budget kept at the end for region re-solves of a cycle of ``n``
-        clusters: ``paths`` above ``LARGE`` clusters on symmetric costs in a run with a time limit
-        (``timed``) that does not ``stop_at_convergence``, else 0."""
-        applies = n > LARGE and symmetric and timed and not self.stop_at_convergence
-        return self.paths if applies else 0.0
-
-    def workers_for(self, n: int, timed: bool) -> int:
-        """Threads searching a cycle of ``n`` clusters: ``workers`` (default
-        :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`, 2 where two cores are
-        free) above ``LARGE`` clusters in a run with a time limit (``timed``) that does not
-        ``stop_at_convergence``, else 1."""
-        if not (n > LARGE and timed and not self.stop_at_convergence):
-            return 1
-        return self.workers if self.workers is not None else default_workers()
-
-    def patience_for(self, n: int) -> int:
-        """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
-        ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
-        GTSPLIB's 87-217-cluster instances gave lower gaps within GLNS's budgets)."""
-        if self.patience is not None:
-            return self.patience
-        return max(50, 5 * n) if self.stop_at_convergence else self.iterations_for(n)
 
 
 @dataclass
@@ -351,8 +203,8 @@ class _Search:
         return _Run(best, best_cost, weights_r, weights_i, clock0, done, best_at=done)
 
     def trials(self, run: _Run, deadline: float | None, rng: np.random.Generator) -> None:
-        """Trials from ``run``'s best tour until converged (``stop_at_convergence``) or the
-        deadline, updating ``run`` in place."""
+        """Trials from ``run``'s best tour until converged (an effort that :attr:`stops
+        <LnsSettings.stops>`) or the deadline, updating ``run`` in place."""
         p, s = self.p, self.s
         n = p.n_clusters
         iterations, patience = s.iterations_for(n), s.patience_for(n)
@@ -363,13 +215,13 @@ class _Search:
         steps, heat = 1, 1.0
         # Trials restart from the base: the best tour, or after a cold restart that run's best.
         base, base_cost, fails = run.best.copy(), run.best_cost, 0
-        cold = s.restart_after > 0 and not s.stop_at_convergence and deadline is not None
-        fit = s.fit_to_time and not s.stop_at_convergence and deadline is not None
-        while not exact and not (run.converged and (s.stop_at_convergence or deadline is None)):
+        cold = s.cold_after > 0 and (s.stops or deadline is not None)
+        fit = s.fit_to_time and not s.stops and deadline is not None
+        while not exact and not (run.converged and (s.stops or deadline is None)):
             if is_past(deadline):
                 run.timed_out = True
                 break
-            if cold and fails >= s.restart_after:
+            if cold and fails >= s.cold_after:
                 base, base_cost = self.local_search(self.start_tour("random", deadline))
                 heat, fails = 1.0, 0
                 if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
@@ -426,7 +278,7 @@ class _Search:
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                             run.best, run.best_cost = base.copy(), base_cost
                             self.progress(base_cost)
-            run.converged = run.converged or run.trials >= s.trials
+            run.converged = run.converged or run.trials >= s.trial_count
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
                rng: np.random.Generator, passes: int | None = None) -> float:
@@ -446,7 +298,7 @@ class _Search:
         self.progress(run.best_cost)
 
     def run(self, deadline: float | None) -> tuple[np.ndarray, float, dict, bool]:
-        """Search until converged (``stop_at_convergence``) or the deadline; returns (tour, cost,
+        """Search until converged (an effort that stops) or the deadline; returns (tour, cost,
         stats, whether the deadline came before convergence)."""
         p, s = self.p, self.s
         kernels.seed(int(self.rng.integers(2**31 - 1)))
@@ -490,30 +342,35 @@ class Lns:
 
     Parameters
     ----------
+    effort
+        When the search ends (:data:`~gtsp_bench.solvers.heuristics.lns_settings.EFFORTS`):
+        ``fast``, ``default`` (the default) or ``slow`` stop after their trials, the time limit a
+        cap; ``budget`` uses the whole time limit.
     iterations, trials, patience
         Iterations per trial (default ``max(100, 25 n)``, n = clusters incl. the depot's); trials
-        until the search counts as converged; iterations without a new trial best that end a
-        trial (default ``max(50, 5 n)`` with ``stop_at_convergence``, else none).
+        until the search counts as converged (default: the effort's); iterations without a new
+        trial best that end a trial (default ``max(50, 5 n)`` when the search stops, else none).
     remove_fraction, max_removals
         At most this share of the clusters, in (0, 1], and at most this many (>= 1; default 100,
         or 25 above ``LARGE`` clusters) are removed per iteration.
     start_temperature, end_temperature
-        Annealing temperatures as multiples of the tour's mean edge cost (>= 0; defaults 0.3 with
-        ``stop_at_convergence``, else 1.0, and 0.003).
+        Annealing temperatures as multiples of the tour's mean edge cost (>= 0; defaults 0.3 when
+        the search stops, 1.0 with ``budget``, and 0.003).
     reaction, noise
         Weight of the newest score in an operator's weight, in (0, 1]; noisy insertions add up
         to ``noise`` times the mean edge cost to each price (>= 0).
     neighbours
         Moves join a cluster only to its nearest clusters (default 10; all on asymmetric costs).
     stop_at_convergence
-        Stop after ``trials`` trials instead of going on with more until the time limit.
+        ``true``: effort ``fast``; ``false``: effort ``budget`` (not with ``effort``).
     restart_after
-        Trials in a row without improvement before a cold restart (0: never).
+        Trials in a row without improvement before a cold restart (0: never; default: the
+        effort's).
     reopt_window
         An iteration re-opts only the heads within this many positions of a change (>= 0; default
         0 = the full re-opt up to ``LARGE`` clusters, 4 above).
     fit_to_time, fit_trials
-        Without ``stop_at_convergence``, trials end, cooled, at the limit and are short enough
+        With effort ``budget``, trials end, cooled, at the limit and are short enough
         for ``fit_trials`` (>= 1, default 32) to fit (at least ``FIT_FLOOR`` iterations per cluster).
     points, quadrants
         Edge costs from the coordinates, not the matrix (the same numbers; default from 2,000
@@ -531,8 +388,8 @@ class Lns:
         ``start_iterations`` (>= 1) iterations per cluster; the trials start from the best.
     paths, path_clusters, path_iterations
         Share of the time limit, in [0, 1] (default 0.3), kept for region re-solves of the best
-        tour at the end (above ``LARGE`` clusters, symmetric costs, timed, without
-        ``stop_at_convergence``): the ``path_clusters`` (>= 2, default 80) clusters nearest a
+        tour at the end (above ``LARGE`` clusters, symmetric costs, timed, effort ``budget``): the
+        ``path_clusters`` (>= 2, default 80) clusters nearest a
         random one, the tour's paths through them re-solved as a small GTSP with
         ``path_iterations`` (>= 0, default 5) iterations per cluster
         (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
@@ -540,7 +397,7 @@ class Lns:
         Passes of region re-solves over the start of each trial that did not improve it (above
         ``LARGE`` clusters, symmetric costs; >= 0, default 0).
     workers, exchange
-        Threads of a timed search above ``LARGE`` clusters without ``stop_at_convergence`` (>= 1;
+        Threads of a timed search above ``LARGE`` clusters with effort ``budget`` (>= 1;
         default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
         islands that go on from the best island's tour after the ``exchange`` share of the
         trials' time (in [0, 1], default 0.5; 1: never;
@@ -548,12 +405,15 @@ class Lns:
     """
 
     asymmetric = True
+    capped = True  #: given no time limit, run_solver gives it the default one
 
     def __init__(
-        self, iterations: int | None = None, trials: int = 3, patience: int | None = None,
+        self, effort: str | None = None, iterations: int | None = None, trials: int | None = None,
+        patience: int | None = None,
         remove_fraction: float = 0.3, max_removals: int | None = None, start_temperature: float | None = None,
         end_temperature: float = 0.003, reaction: float = 0.1, noise: float = 0.1,
-        neighbours: int | None = None, stop_at_convergence: bool = False, restart_after: int = 2,
+        neighbours: int | None = None, stop_at_convergence: bool | None = None,
+        restart_after: int | None = None,
         reopt_window: int | None = None, fit_to_time: bool = True, fit_trials: int = 32,
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
@@ -567,20 +427,20 @@ class Lns:
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, fail_passes, workers,
-                                    exchange)
+                                    exchange, effort)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(
         self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
         seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
     ) -> Solution:
-        """Search until the time limit (or convergence with ``stop_at_convergence``), from the
-        warm start ``initial`` if given (class docstring), reporting each better tour.
+        """Search until its effort ends it or the time limit, from the warm start ``initial`` if
+        given (class docstring), reporting each better tour.
 
-        Without a time limit, :func:`gtsp_bench.checks.default_time_limit` applies. The status is
-        ``time_limit`` only when the limit came before the search converged.
+        Without a time limit (``None``; :func:`gtsp_bench.registry.run_solver` gives the default
+        one) every effort stops after its trials. The status is ``time_limit`` only when the
+        limit came before the search converged.
         """
-        time_limit = time_limit_or_default(time_limit, instance.n_clusters)
         deadline = deadline_after(time_limit)
         if initial is not None and initial.lower_bound is not None and \
                 initial.objective - initial.lower_bound <= REL_TOL * max(1.0, abs(initial.objective)):

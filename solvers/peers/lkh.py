@@ -225,6 +225,7 @@ class LKH:
 
     #: Noon-Bean already makes a directed (ATSP) problem: asymmetric costs go in as they are.
     asymmetric = True
+    capped = True  #: given no time limit, run_solver gives it the default one
 
     def __init__(self, runs: int = 1, max_trials: int | None = None, subgradient: bool = True) -> None:
         self.runs = check_int("runs", runs, 1)

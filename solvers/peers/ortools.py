@@ -318,6 +318,7 @@ class OrToolsPeer:
 
     #: The transit matrix is directed (row = from, column = to).
     asymmetric = True
+    capped = True  #: given no time limit, run_solver gives it the default one
 
     def __init__(
         self, first_solution: str = "PATH_CHEAPEST_ARC", metaheuristic: str = "GUIDED_LOCAL_SEARCH",

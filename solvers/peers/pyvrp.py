@@ -65,6 +65,7 @@ class PyVRPPeer:
 
     #: PyVRP's distance matrix is directed (row = from, column = to).
     asymmetric = True
+    capped = True  #: given no time limit, run_solver gives it the default one
 
     def __init__(self, no_improvement: int = 2_000, resolution: float = RESOLUTION) -> None:
         self.no_improvement = check_int("no_improvement", no_improvement, 1)

@@ -13,8 +13,10 @@ together); ``make test`` runs them, ``-m 'not large_gtsplib'`` leaves them out.
 from __future__ import annotations
 
 import csv
+import re
 import subprocess
 import sys
+from dataclasses import replace
 
 import pytest
 
@@ -37,20 +39,39 @@ def _param(row: dict[str, str]):
 
 
 def test_the_library_is_complete():
-    """143 instances, each with its file and GLKH's tour; nothing else in the folder."""
+    """143 instances, each with its file and its best-known tour; besides them only tours a
+    shorter one superseded (NAME.LENGTH.tour.gz, longer than the row's value)."""
     assert len(ROWS) == 143 and len(ASYMMETRIC) == 19
     files = {p.name for p in GTSPLIB.glob("*.gtsp.gz")}
     assert files == {f"{r['name']}.gtsp.gz" for r in ROWS}
     tours = {f"tours/{p.name}" for p in (GTSPLIB / "tours").iterdir()}
-    assert tours == {r["tour"] for r in ROWS}
+    assert tours >= {r["tour"] for r in ROWS}
     for r in ROWS:  # the tour file's name carries its length: NAME.LENGTH.tour.gz
         assert r["tour"] == f"tours/{r['name']}.{r['best_known']}.tour.gz"
+    by_name = {r["name"]: float(r["best_known"]) for r in ROWS}
+    for t in tours - {r["tour"] for r in ROWS}:
+        name, length = t.removeprefix("tours/").removesuffix(".tour.gz").rsplit(".", 1)
+        assert float(length) > by_name[name], t
+
+
+def test_reference_columns_say_who_found_each_tour():
+    """Each row names its tour's finder: GLKH (the distributed tours, no date) or a run of this
+    project (a best_known row with its ISO date); a certificate, where given, is a file."""
+    for r in ROWS:
+        if r["source"] == "GLKH":
+            assert r["date"] == "", r["name"]
+        else:
+            assert r["source"].startswith("gtsp-bench ") and r["status"] == "best_known", r["name"]
+            assert re.fullmatch(r"\d{4}-\d{2}-\d{2}", r["date"]), r["name"]
+        if r["certificate"]:
+            assert (GTSPLIB / r["certificate"]).is_file(), r["name"]
 
 
 @pytest.mark.parametrize("row", [_param(r) for r in ROWS])
 def test_best_tour_prices_to_the_best_known_value(row):
-    """GLKH's tour, read as (order, heads) and priced by the evaluator, has the published length;
-    AGTSP files give asymmetric instances, the others symmetric ones."""
+    """The row's tour (GLKH's, or a shorter one kept since), read as (order, heads) and priced by
+    the evaluator, has the row's length; AGTSP files give asymmetric instances, the others
+    symmetric ones."""
     inst = read_instance(GTSPLIB / f"{row['name']}.gtsp.gz")
     assert (inst.n_clusters, inst.n_nodes) == (int(row["clusters"]), int(row["nodes"]))
     assert inst.symmetric == (row["type"] != "AGTSP")
@@ -101,15 +122,55 @@ def test_reference_status():
 
 
 def test_glns_table_agrees_with_best_known():
-    """glns-45.csv's instances, sizes and best-known values are those of best_known.csv."""
+    """glns-45.csv's instances and sizes are those of best_known.csv, and its (published)
+    best-known values too, except where a shorter tour was kept since."""
     refs = gtsplib.best_known()
     with (GTSPLIB / "glns-45.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 45
     for r in rows:
         ref = refs[r["instance"]]
-        assert (ref.nodes, ref.clusters, ref.value) == (
-            int(r["vertices"]), int(r["sets"]), float(r["best_known"]))
+        assert (ref.nodes, ref.clusters) == (int(r["vertices"]), int(r["sets"]))
+        if ref.source == "GLKH":
+            assert ref.value == float(r["best_known"])
+        else:
+            assert ref.value < float(r["best_known"])
+
+
+def _library(tmp_path, status: str, value: int):
+    """A copy of the library holding 11berlin52 only, its row given ``status`` and ``value``."""
+    ref = replace(gtsplib.best_known()["11berlin52"], status=status, value=value, certificate="c.txt")
+    (tmp_path / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
+    (tmp_path / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
+    return tmp_path
+
+
+def test_keep_tour_writes_a_shorter_tour_and_points_its_row_at_it(tmp_path):
+    """A tour shorter than the row's best-known value: its file NAME.LENGTH.tour.gz prices to its
+    length, the row names it with its value, source and date; status and certificate stay. A
+    tour that is not shorter changes nothing."""
+    where = _library(tmp_path, "best_known", 4100)
+    order, heads = gtsplib.best_tour("11berlin52")
+    row = gtsplib.keep_tour(where, "11berlin52", order, heads, "gtsp-bench lns 1s seed 3", "2026-11-27")
+    assert row is not None and (row.value, row.tour) == (4040, "tours/11berlin52.4040.tour.gz")
+    table = gtsplib.parse_best_known((where / "best_known.csv").read_text())
+    assert table["11berlin52"] == row
+    assert (row.status, row.source, row.date, row.certificate) == (
+        "best_known", "gtsp-bench lns 1s seed 3", "2026-11-27", "c.txt")
+    inst = read_instance(where / "11berlin52.gtsp.gz")
+    assert evaluate(inst, None, *read_tour(where / row.tour, inst)).objective == 4040
+    before = (where / "best_known.csv").read_text()
+    assert gtsplib.keep_tour(where, "11berlin52", order, heads, "x", "2026-11-28") is None
+    assert (where / "best_known.csv").read_text() == before
+
+
+def test_keep_tour_refuses_a_tour_below_a_proven_optimum(tmp_path):
+    """Below an ``optimal`` row the solver or the table is wrong: an error, nothing written."""
+    where = _library(tmp_path, "optimal", 4100)
+    order, heads = gtsplib.best_tour("11berlin52")
+    with pytest.raises(InputError, match="below the proven optimum 4100"):
+        gtsplib.keep_tour(where, "11berlin52", order, heads, "x", "2026-11-27")
+    assert not (where / "tours").exists()
 
 
 def test_helpers_by_name():

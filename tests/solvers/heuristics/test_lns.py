@@ -1,6 +1,8 @@
-"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, budget, options.
+"""The LNS: feasible, never below and usually at the optimum, seeded, time limit, budget, options,
+effort presets.
 
-Most runs use ``stop_at_convergence`` (the old behaviour: stop after the trials) to stay fast.
+Most runs use ``stop_at_convergence`` (effort ``fast``: stop after three trials) to stay fast;
+those that test the use of a whole time limit say effort ``budget``.
 """
 
 from __future__ import annotations
@@ -8,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.lns import LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
@@ -22,6 +24,8 @@ from tests.tiny_cases import tiny_asymmetric_case, tiny_case
 
 #: lns that stops when its trials are done instead of using the whole time limit.
 CONVERGE = {"stop_at_convergence": True}
+#: lns that uses the whole time limit (the fixed-budget benchmarks' runs).
+BUDGET = {"effort": "budget"}
 
 
 @pytest.mark.parametrize("depot", [True, False])
@@ -101,10 +105,11 @@ def test_stop_at_convergence_stops_after_its_trials():
 
 
 def test_uses_the_time_limit_when_converged():
-    """Without stop_at_convergence, the same settings go on with more trials until the limit, and
+    """With effort budget, the same settings go on with more trials until the limit, and
     the run still counts as converged (status feasible)."""
     inst = generate_instance(12, 4, seed=3)
-    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2), inst, 0.5, time_limit=1.0)
+    r = run_solver(get_solver("lns", iterations=10, patience=5, trials=2, **BUDGET), inst, 0.5,
+                   time_limit=1.0)
     assert r.status == "feasible"
     assert r.stats["converged"] is True
     assert r.stats["trials"] > 2
@@ -186,11 +191,11 @@ def test_bad_options_rejected(options, message):
 
 
 def test_time_limited_defaults_cool_each_trial_fully():
-    """Without stop_at_convergence a trial runs all its iterations (no patience) from a hotter
+    """With effort budget a trial runs all its iterations (no patience) from a hotter
     start; given values win in both modes."""
-    s = LnsSettings()
+    s = LnsSettings(**BUDGET)
     assert s.patience_for(41) == s.iterations_for(41) == 1025 and s.hottest == 1.0
-    given = LnsSettings(patience=7, start_temperature=0.5)
+    given = LnsSettings(patience=7, start_temperature=0.5, **BUDGET)
     assert given.patience_for(41) == 7 and given.hottest == 0.5
     with pytest.raises(InputError, match="must not exceed"):
         LnsSettings(end_temperature=0.5, stop_at_convergence=True)
@@ -258,8 +263,10 @@ def test_fitted_trials_fill_a_short_budget():
     """A time-limited run whose trials would not fit its budget makes at least several shorter
     ones (the fitted length), and more with a larger fit_trials."""
     inst = generate_instance(14, 4, seed=6)
-    few = run_solver(get_solver("lns", iterations=10**6, fit_trials=1), inst, 0.4, seed=1, time_limit=0.4)
-    many = run_solver(get_solver("lns", iterations=10**6, fit_trials=64), inst, 0.4, seed=1, time_limit=0.4)
+    few = run_solver(get_solver("lns", iterations=10**6, fit_trials=1, **BUDGET), inst, 0.4, seed=1,
+                     time_limit=0.4)
+    many = run_solver(get_solver("lns", iterations=10**6, fit_trials=64, **BUDGET), inst, 0.4, seed=1,
+                      time_limit=0.4)
     assert few.stats["trials"] <= 2 < 10 <= many.stats["trials"]
 
 
@@ -270,7 +277,7 @@ def test_large_cycles_fit_only_whole_trials():
     (One thread: islands each end a trial at the exchange too.)"""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", fit_trials=64, workers=1), inst, 0.5, seed=1, time_limit=3.0)
+    r = run_solver(get_solver("lns", fit_trials=64, workers=1, **BUDGET), inst, 0.5, seed=1, time_limit=3.0)
     assert r.stats["iterations"] >= 25 * (n + 1) * (r.stats["trials"] - 1)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
@@ -408,3 +415,56 @@ def test_lns_warm_start():
     again = run_solver("lns", inst, 0.4, time_limit=30.0, seed=3, initial=proven)
     assert (again.order, again.heads, again.objective) == (r.order, r.heads, r.objective)
     assert again.runtime_s < 1.0 and again.stats["warm_start"] == "at its lower bound"
+
+
+@pytest.mark.parametrize("effort", list(EFFORTS))
+def test_effort_presets_set_the_stopping_rule(effort):
+    """Each preset: whether the search stops after its trials, how many, when a cold restart
+    comes; explicitly given trials and restart_after win over the preset's."""
+    s = LnsSettings(effort=effort)
+    preset = EFFORTS[effort]
+    assert s.preset == preset and s.stops == (effort != "budget")
+    assert (s.trial_count, s.cold_after) == (preset.trials, preset.restart_after)
+    given = LnsSettings(effort=effort, trials=5, restart_after=0)
+    assert (given.trial_count, given.cold_after) == (5, 0)
+
+
+def test_effort_defaults_and_the_old_switch():
+    """The default effort is ``default``; stop_at_convergence true is ``fast`` (the paper's runs),
+    false is ``budget``; both at once is refused."""
+    assert LnsSettings().preset == EFFORTS["default"] and LnsSettings().stops
+    assert LnsSettings(stop_at_convergence=True).preset == EFFORTS["fast"]
+    assert LnsSettings(stop_at_convergence=False).preset == EFFORTS["budget"]
+    with pytest.raises(InputError, match="give effort or stop_at_convergence, not both"):
+        LnsSettings(effort="fast", stop_at_convergence=True)
+
+
+def test_unknown_effort_lists_the_presets():
+    """A misspelt preset is refused with the valid names."""
+    valid = "'fast', 'default', 'slow', 'budget'"
+    with pytest.raises(InputError, match=f"effort must be one of {valid}, got 'quick'"):
+        get_solver("lns", effort="quick")
+
+
+@pytest.mark.parametrize("effort", ["fast", "default", "slow"])
+def test_stopping_efforts_end_on_their_own(effort):
+    """On 11berlin52 (proven optimum 4040) the presets that stop end after their trials, long
+    before a 600 s cap (status feasible, converged), never below the optimum; the same seed gives
+    the same run."""
+    inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
+    solver = get_solver("lns", effort=effort)
+    r = run_solver(solver, inst, None, seed=4, time_limit=600)
+    assert r.status == "feasible" and r.stats["converged"] is True
+    assert r.stats["trials"] == EFFORTS[effort].trials
+    assert r.objective >= 4040 - 1e-9 * 4040
+    again = run_solver(solver, inst, None, seed=4, time_limit=600)
+    assert (again.order, again.heads, again.stats["iterations"]) == (r.order, r.heads, r.stats["iterations"])
+
+
+def test_without_a_time_limit_every_effort_stops():
+    """Called directly with no time limit, lns stops after its trials whatever its effort (the
+    default limit is the harness's, run_solver's, to give)."""
+    inst = generate_instance(9, 3, seed=4)
+    for effort in EFFORTS:
+        sol = get_solver("lns", effort=effort, iterations=50).solve(inst, 0.5, seed=1)
+        assert sol.status == "feasible" and sol.stats["converged"] is True, effort

@@ -22,15 +22,16 @@ from gtsp_bench.registry import get_solver, run_solver
 
 
 @pytest.mark.parametrize("n, options, timed, workers", [
-    (LARGE + 1, {"workers": 2}, True, 2),
-    (LARGE + 1, {"workers": 1}, True, 1),
-    (LARGE, {"workers": 2}, True, 1),  # up to LARGE clusters: one
-    (LARGE + 1, {"workers": 2}, False, 1),  # no time limit
+    (LARGE + 1, {"workers": 2, "effort": "budget"}, True, 2),
+    (LARGE + 1, {"workers": 1, "effort": "budget"}, True, 1),
+    (LARGE, {"workers": 2, "effort": "budget"}, True, 1),  # up to LARGE clusters: one
+    (LARGE + 1, {"workers": 2, "effort": "budget"}, False, 1),  # no time limit
+    (LARGE + 1, {"workers": 2}, True, 1),  # the default effort stops after its trials
     (LARGE + 1, {"workers": 2, "stop_at_convergence": True}, True, 1),
 ])
 def test_threads_by_size_and_budget(n, options, timed, workers):
-    """``workers`` threads above LARGE clusters in a time-limited run that does not stop at
-    convergence (a converging run stays reproducible), else one."""
+    """``workers`` threads above LARGE clusters in a time-limited run with effort ``budget`` (a
+    run that stops after its trials stays reproducible), else one."""
     assert LnsSettings(**options).workers_for(n, timed) == workers
 
 
@@ -79,7 +80,7 @@ def test_two_workers_on_a_large_cycle(exchange):
     as the evaluator prices it, no worse than the greedy tour it can start from."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", workers=2, exchange=exchange), inst, 0.5, seed=1,
+    r = run_solver(get_solver("lns", workers=2, exchange=exchange, effort="budget"), inst, 0.5, seed=1,
                    time_limit=3.0)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)

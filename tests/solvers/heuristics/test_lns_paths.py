@@ -173,13 +173,13 @@ def test_region_passes_never_make_the_tour_worse():
 
 
 def test_default_run_ends_with_regions_above_large():
-    """By default a time-limited run above LARGE clusters keeps the end of its budget for region
+    """With effort ``budget`` a time-limited run above LARGE clusters keeps the end of its budget for region
     re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
     with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off."""
     assert LnsSettings().fail_passes == 0
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver("lns", inst, 0.5, seed=1, time_limit=3.0)
+    r = run_solver(get_solver("lns", effort="budget"), inst, 0.5, seed=1, time_limit=3.0)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
@@ -189,8 +189,9 @@ def test_default_run_ends_with_regions_above_large():
 
 
 @pytest.mark.parametrize("n, symmetric, options, timed, share", [
-    (LARGE + 1, True, {}, True, 0.3),
-    (LARGE + 1, True, {"paths": 0.15}, True, 0.15),
+    (LARGE + 1, True, {"effort": "budget"}, True, 0.3),
+    (LARGE + 1, True, {"paths": 0.15, "effort": "budget"}, True, 0.15),
+    (LARGE + 1, True, {}, True, 0.0),  # the default effort stops after its trials
     (LARGE, True, {}, True, 0.0),  # up to LARGE clusters: never
     (LARGE + 1, False, {}, True, 0.0),  # directed costs: never
     (LARGE + 1, True, {}, False, 0.0),  # no time limit
@@ -199,7 +200,7 @@ def test_default_run_ends_with_regions_above_large():
 ])
 def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
     """The end phase's share: ``paths`` (default 0.3) above LARGE clusters on symmetric costs in
-    a time-limited run that does not stop at convergence, else none."""
+    a time-limited run with effort ``budget``, else none."""
     assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
 
 
@@ -208,8 +209,8 @@ def test_paths_option_on_a_large_cycle():
     tour, priced as the evaluator prices it, and the windows counted in the stats."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", paths=0.5, path_clusters=40, path_iterations=1), inst, 0.5,
-                   seed=1, time_limit=3.0)
+    solver = get_solver("lns", paths=0.5, path_clusters=40, path_iterations=1, effort="budget")
+    r = run_solver(solver, inst, 0.5, seed=1, time_limit=3.0)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0

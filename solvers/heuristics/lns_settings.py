@@ -1,0 +1,230 @@
+"""The settings of :mod:`gtsp_bench.solvers.heuristics.lns`, and its **effort** presets.
+
+An effort preset, in the spirit of GLNS's modes, says when the search ends (:data:`EFFORTS`):
+
+``fast``
+    three warm trials from the first tour, then stop (what ``stop_at_convergence=true`` does);
+``default``
+    more trials, with a cold restart from a random-insertion tour after trials in a row that did
+    not improve their start, then stop;
+``slow``
+    the same with more trials and more patience before a cold restart;
+``budget``
+    go on until the time limit: trials fitted to it, cold restarts, two threads and region
+    re-solves at the end above ``LARGE`` clusters (the fixed-budget benchmarks run this).
+
+With the first three the time limit is a cap, not a target. ``trials`` and ``restart_after``
+given explicitly win over the preset's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from gtsp_bench.solvers.heuristics.lns_islands import default_workers
+
+from gtsp_bench.checks import check_bool, check_choice, check_float, check_int
+from gtsp_bench.errors import InputError
+
+#: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
+LARGE = 400
+
+
+@dataclass(frozen=True)
+class Effort:
+    """An effort preset: whether the search ends on its own (``stops``), after how many trials
+    (``trials``; with ``budget`` the trials after which it counts as converged), and after how
+    many trials in a row without improvement the next starts cold (``restart_after``; 0: never)."""
+
+    stops: bool
+    trials: int
+    restart_after: int
+
+
+#: The effort presets by name (module docstring).
+EFFORTS: dict[str, Effort] = {
+    "fast": Effort(stops=True, trials=3, restart_after=0),
+    "default": Effort(stops=True, trials=12, restart_after=2),
+    "slow": Effort(stops=True, trials=40, restart_after=3),
+    "budget": Effort(stops=False, trials=3, restart_after=2),
+}
+
+
+@dataclass(frozen=True)
+class LnsSettings:
+    """Validated settings of :class:`Lns` (see there)."""
+
+    iterations: int | None = None
+    trials: int | None = None
+    patience: int | None = None
+    remove_fraction: float = 0.3
+    max_removals: int | None = None
+    start_temperature: float | None = None
+    end_temperature: float = 0.003
+    reaction: float = 0.1
+    noise: float = 0.1
+    neighbours: int | None = None
+    stop_at_convergence: bool | None = None
+    restart_after: int | None = None
+    reopt_window: int | None = None
+    fit_to_time: bool = True
+    fit_trials: int = 32
+    points: bool | None = None
+    quadrants: bool | None = None
+    macro: bool = False
+    macro_iterations: int = 5
+    macro_groups: float = 5.0
+    starts: int = 1
+    start_iterations: int = 5
+    paths: float = 0.3
+    path_clusters: int = 80
+    path_iterations: int = 5
+    fail_passes: int = 0
+    workers: int | None = None
+    exchange: float = 0.5
+    effort: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.iterations is not None:
+            check_int("iterations", self.iterations, 1)
+        if self.trials is not None:
+            check_int("trials", self.trials, 1)
+        if self.patience is not None:
+            check_int("patience", self.patience, 1)
+        check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
+        if self.max_removals is not None:
+            check_int("max_removals", self.max_removals, 1)
+        if self.stop_at_convergence is not None:
+            check_bool("stop_at_convergence", self.stop_at_convergence)
+        if self.effort is not None:
+            check_choice("effort", self.effort, tuple(EFFORTS))
+            if self.stop_at_convergence is not None:
+                raise InputError("give effort or stop_at_convergence, not both "
+                                 "(stop_at_convergence=true is effort=fast, false is effort=budget)")
+        if self.start_temperature is not None:
+            check_float("start_temperature", self.start_temperature, 0.0, math.inf, open_low=False)
+        check_float("end_temperature", self.end_temperature, 0.0, math.inf, open_low=False)
+        if self.end_temperature > self.hottest:
+            raise InputError(
+                f"end_temperature ({self.end_temperature!r}) must not exceed start_temperature "
+                f"({self.hottest!r})"
+            )
+        check_float("reaction", self.reaction, 0.0, 1.0)
+        check_float("noise", self.noise, 0.0, math.inf, open_low=False)
+        if self.neighbours is not None:
+            check_int("neighbours", self.neighbours, 1)
+        if self.restart_after is not None:
+            check_int("restart_after", self.restart_after, 0)
+        if self.reopt_window is not None:
+            check_int("reopt_window", self.reopt_window, 0)
+        check_bool("fit_to_time", self.fit_to_time)
+        check_int("fit_trials", self.fit_trials, 1)
+        if self.points is not None:
+            check_bool("points", self.points)
+        if self.quadrants is not None:
+            check_bool("quadrants", self.quadrants)
+        check_bool("macro", self.macro)
+        check_int("macro_iterations", self.macro_iterations, 0)
+        check_float("macro_groups", self.macro_groups, 0.0, math.inf, open_low=False)
+        check_int("starts", self.starts, 1)
+        check_int("start_iterations", self.start_iterations, 1)
+        check_float("paths", self.paths, 0.0, 1.0, open_low=False)
+        check_int("path_clusters", self.path_clusters, 2)
+        check_int("path_iterations", self.path_iterations, 0)
+        check_int("fail_passes", self.fail_passes, 0)
+        if self.workers is not None:
+            check_int("workers", self.workers, 1)
+        check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
+
+    @property
+    def preset(self) -> Effort:
+        """The effort preset: ``effort`` (default ``default``); ``stop_at_convergence`` true is
+        ``fast``, false ``budget``."""
+        if self.stop_at_convergence is not None:
+            return EFFORTS["fast" if self.stop_at_convergence else "budget"]
+        return EFFORTS[self.effort or "default"]
+
+    @property
+    def stops(self) -> bool:
+        """Whether the search ends after its trials (every preset but ``budget``)."""
+        return self.preset.stops
+
+    @property
+    def trial_count(self) -> int:
+        """Trials until the search has converged: ``trials``, else the preset's."""
+        return self.trials if self.trials is not None else self.preset.trials
+
+    @property
+    def cold_after(self) -> int:
+        """Trials in a row without improvement before a cold restart (0: never):
+        ``restart_after``, else the preset's."""
+        return self.restart_after if self.restart_after is not None else self.preset.restart_after
+
+    @property
+    def hottest(self) -> float:
+        """The start temperature (default 0.3 when the search :attr:`stops`, else 1.0: a search
+        that uses its whole time limit can afford to wander further before it cools)."""
+        if self.start_temperature is not None:
+            return self.start_temperature
+        return 0.3 if self.stops else 1.0
+
+    def iterations_for(self, n: int) -> int:
+        """Iterations per trial for a cycle of ``n`` clusters (default ``max(100, 25 n)``)."""
+        return self.iterations if self.iterations is not None else max(100, 25 * n)
+
+    def neighbours_for(self, n: int, symmetric: bool) -> int:
+        """Neighbour-list length for ``n`` clusters (default 10 on symmetric costs; on directed
+        costs every other cluster: there the nearest clusters, by the cheapest arc either way, say
+        little about where a cluster fits)."""
+        if self.neighbours is not None:
+            return self.neighbours
+        return 10 if symmetric else max(1, n - 1)
+
+    def quadrants_for(self, n: int) -> bool:
+        """Whether the neighbour lists of ``n`` clusters take the nearest in each quadrant
+        (default: above ``LARGE`` clusters)."""
+        return self.quadrants if self.quadrants is not None else n > LARGE
+
+    def max_removals_for(self, n: int) -> int:
+        """Most clusters removed in one iteration for ``n`` clusters (default 100 up to
+        ``LARGE`` clusters, 25 above: there an iteration's insertion and local search grow with
+        the removals, and many small iterations did better in a fixed time)."""
+        if self.max_removals is not None:
+            return self.max_removals
+        return 100 if n <= LARGE else 25
+
+    def reopt_window_for(self, n: int) -> int:
+        """Half-width of an iteration's windowed re-opt for ``n`` clusters (default 0, the full
+        re-opt, up to ``LARGE`` clusters; 4 above: there a full re-opt per local search round cost
+        more than the rest of the iteration)."""
+        if self.reopt_window is not None:
+            return self.reopt_window
+        return 0 if n <= LARGE else 4
+
+    def path_share_for(self, n: int, symmetric: bool, timed: bool) -> float:
+        """The share of the budget kept at the end for region re-solves of a cycle of ``n``
+        clusters: ``paths`` above ``LARGE`` clusters on symmetric costs in a run with a time limit
+        (``timed``) that does not :attr:`stop <stops>`, else 0."""
+        applies = n > LARGE and symmetric and timed and not self.stops
+        return self.paths if applies else 0.0
+
+    def workers_for(self, n: int, timed: bool) -> int:
+        """Threads searching a cycle of ``n`` clusters: ``workers`` (default
+        :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`, 2 where two cores are
+        free) above ``LARGE`` clusters in a run with a time limit (``timed``) that does not
+        :attr:`stop <stops>`, else 1."""
+        if not (n > LARGE and timed and not self.stops):
+            return 1
+        return self.workers if self.workers is not None else default_workers()
+
+    def patience_for(self, n: int) -> int:
+        """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
+        ``stop_at_convergence``; else none: each trial cools over all its iterations, which on
+        GTSPLIB's 87-217-cluster instances gave lower gaps within GLNS's budgets)."""
+        if self.patience is not None:
+            return self.patience
+        return max(50, 5 * n) if self.stops else self.iterations_for(n)
+
+
+__all__ = ["EFFORTS", "LARGE", "Effort", "LnsSettings"]
