@@ -9,6 +9,7 @@ checks that the page and the definitions agree.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -115,8 +116,15 @@ def write_listing(page: Path) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m gtsp_bench.report.listing [PAGE]``: refresh the block (default :data:`PAGE`)."""
-    args = list(sys.argv[1:] if argv is None else argv)
-    page = Path(args[0]) if args else PAGE
+    parser = argparse.ArgumentParser(
+        prog="python -m gtsp_bench.report.listing",
+        description="refresh the generated list of benchmark definitions in a Markdown page")
+    parser.add_argument("page", nargs="?", type=Path, default=PAGE,
+                        help=f"the page holding the block (default: {PAGE})")
+    page = parser.parse_args(argv).page
+    if not page.is_file():
+        print(f"gtsp-bench: error: {page}: no such file", file=sys.stderr)
+        return 2
     changed = write_listing(page)
     print(f"{page}: {'refreshed' if changed else 'already up to date'}", file=sys.stderr)
     return 0

@@ -84,3 +84,14 @@ def test_write_listing_rewrites_only_its_block(tmp_path):
     assert text.startswith("before\n") and text.endswith("after\n")
     assert _BLOCK.findall(text) == [benchmarks_markdown()]
     assert write_listing(page) is False
+
+
+def test_main_refuses_a_missing_page_in_one_line(tmp_path, capsys):
+    """A page that does not exist is one error line and exit 2, not a traceback."""
+    from gtsp_bench.report.listing import main
+
+    missing = tmp_path / "nope.md"
+    assert main([str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"gtsp-bench: error: {missing}: no such file\n"
+    assert not missing.exists()
