@@ -15,12 +15,12 @@ clear error.
 from __future__ import annotations
 
 from gtsp_bench.solvers.exact.mip.backends import GurobiBackend, import_gurobipy
-from gtsp_bench.solvers.exact.mip.branch_cut import MipSolver
 from gtsp_bench.solvers.exact.mip.options import MipOptions
+from gtsp_bench.solvers.exact.mip.solve import MipSolver
 
 
 class Gurobi(MipSolver):
-    """Exact GTSP by MILP with Gurobi (options: :class:`gtsp_bench.solvers.exact.mip.branch_cut.MipSolver`).
+    """Exact GTSP by MILP with Gurobi (options: :class:`gtsp_bench.solvers.exact.mip.solve.MipSolver`).
 
     Raises :class:`InputError` at once when gurobipy is not installed.
     """
