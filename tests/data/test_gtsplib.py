@@ -181,3 +181,25 @@ def test_optional_reference_columns_default_to_empty():
     ref = gtsplib.parse_best_known(text)["x"]
     assert (ref.value, ref.source, ref.date, ref.certificate) == (3.5, "", "", "")
     assert gtsplib.parse_best_known(gtsplib.format_best_known([ref]))["x"] == ref
+
+
+_CERTIFIED = [r for r in gtsplib.best_known().values() if r.certificate]
+
+
+def test_certificates_are_named_for_proven_rows_and_shipped():
+    assert len(_CERTIFIED) >= 40
+    for ref in _CERTIFIED:
+        assert ref.proven and (GTSPLIB / ref.certificate).is_file(), ref.name
+    shipped = {p.name for p in (GTSPLIB / "proofs").glob("*.cert.json.gz")}
+    assert shipped == {ref.certificate.split("/")[-1] for ref in _CERTIFIED}
+    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 8_000_000
+
+
+@pytest.mark.parametrize("ref", _CERTIFIED, ids=lambda r: r.name)
+def test_shipped_certificates_prove_the_best_known_value(ref):
+    """Each shipped certificate passes the checker and proves the table's value optimal."""
+    from gtsp_bench.proof import check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    result = check_certificate(gtsplib.read(ref.name), read_certificate(GTSPLIB / ref.certificate))
+    assert result.proven and result.value == ref.value
