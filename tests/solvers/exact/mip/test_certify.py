@@ -93,3 +93,38 @@ def test_only_a_proof_writes_a_certificate(tmp_path: Path) -> None:
 def test_three_clusters_have_no_certificate(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="needs at least 4 clusters"):
         Milp(certificate=str(tmp_path / "c")).solve(generate_instance(2, 3, seed=0), 0.5)
+
+
+def test_an_infeasible_lp_gives_a_farkas_proof_the_checker_accepts() -> None:
+    """Two heads fixed in one cluster: HiGHS's ray, logged and written, is a Farkas proof that the
+    checker's exact arithmetic confirms over that box (and not over the free one)."""
+    from gtsp_bench.solvers.exact.mip.backends import HighsBackend, LpModel
+    from gtsp_bench.solvers.exact.mip.options import MipOptions
+
+    from gtsp_bench.proof.bounds import Domain, Space, price_duals
+    from gtsp_bench.proof.families import parse_cut
+
+    problem = price(generate_instance(5, 3, seed=2), 0.5)
+    model = build_model(problem, problem.clusters)
+    lp = LpModel(model, HighsBackend(MipOptions()), np.arange(model.n_cols))
+    s = np.zeros(model.n_nodes, dtype=bool)
+    s[[0, 3, 6]] = True
+    lp.add_cuts(subtour_cut(model, s, 0, 1))
+    lp.backend.set_bounds(np.array([0, 1]), np.ones(2), np.ones(2))
+    res = lp.backend.solve_lp(60.0)
+    assert res.status == "infeasible"
+    log = ProofLog(model)
+    log.leaf(0, log.proof("farkas", lp.backend.dual_ray(), lp.cuts, lp.cut_ids))
+    tour = problem.to_tour(*_any_solution(problem))
+    cert = log.certificate(problem, tour, problem.tour_cost(tour), 0.0, [])
+    space = Space.of(problem)
+    cuts = [parse_cut(c, space.cluster_of) for c in cert["cuts"]]
+    priced = price_duals(space, cuts, cert["proofs"][0], cert["dual_bits"])
+    box = Domain.free(space)
+    box.y[[int(model.nodes[0]), int(model.nodes[1])]] = 1
+    assert priced.farkas and priced.bound(box) > 0 >= priced.bound(Domain.free(space))
+
+
+def _any_solution(problem) -> tuple[list[int], list[int]]:
+    k = problem.instance.n_clusters
+    return list(range(k)), [0] * k
