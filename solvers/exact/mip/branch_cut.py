@@ -17,10 +17,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-
-from gtsp_bench.errors import InputError
-from gtsp_bench.problem import Problem
-from gtsp_bench.solver import Progress, no_progress
 from gtsp_bench.solvers.exact.mip import branching, columns
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
@@ -29,6 +25,10 @@ from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
 from gtsp_bench.solvers.exact.mip.options import MipOptions
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.mip.tree import Node
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.problem import Problem
+from gtsp_bench.solver import Progress, no_progress
 
 #: Columns priced into the root LP per round, per node.
 PRICE_PER_NODE = 2
@@ -249,7 +249,7 @@ class _Search:
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
             proof = self.record(res)
             if self.log is not None:
-                self.log.root_round(bound, proof, False)
+                self.log.root_round(bound, proof)
             self.lb = max(self.lb, bound)
             self.report()
             bounds.append(self.lb)
@@ -258,7 +258,7 @@ class _Search:
             fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
             if fix.any():  # fixed columns leave the LP (their nonzeros slow every LP down)
                 if self.log is not None:
-                    self.log.root_round(bound, proof, True)
+                    self.log.root_round(bound, proof, np.flatnonzero(fix))
                 self.fixed |= fix
                 lp.drop_cols(np.flatnonzero(fix[lp.cols]))
             price = np.flatnonzero(absent & ~fix & (rc < -TOL))

@@ -21,10 +21,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
-from gtsp_bench.proof.format import FORMAT, VERSION, instance_header
 from gtsp_bench.solvers.exact.mip.model import GtspModel
 from gtsp_bench.solvers.exact.mip.separation import Cuts
+
+from gtsp_bench.proof.check import ProofError, check_certificate
+from gtsp_bench.proof.format import FORMAT, VERSION, instance_header
 
 #: Duals are written as integers over ``2**DUAL_BITS``.
 DUAL_BITS = 32
@@ -79,6 +80,7 @@ class ProofLog:
         self.proofs: list[RawProof] = []
         self.nodes: list[_Node] = [_Node(None, None)]
         self.best_root: tuple[float, int] | None = None
+        self.root_fixed: list[np.ndarray] = []  # the columns each root fixing fixed
 
     # -------------------------------------------------------------- recording
     def proof(self, kind: str, duals: np.ndarray, cuts: Cuts, ids: np.ndarray) -> int:
@@ -86,12 +88,13 @@ class ProofLog:
         self.proofs.append(RawProof(kind, np.array(duals, dtype=float), cuts, ids))
         return len(self.proofs) - 1
 
-    def root_round(self, bound: float, proof: int, fixed: bool) -> None:
-        """A root LP round: its bound (kept if the best) and whether it fixed columns."""
+    def root_round(self, bound: float, proof: int, fixed: np.ndarray | None = None) -> None:
+        """A root LP round: its bound (kept if the best) and the model columns it fixed, if any."""
         if self.best_root is None or bound > self.best_root[0]:
             self.best_root = (bound, proof)
-        if fixed:
+        if fixed is not None:
             self.nodes[0].fix.append({"proof": proof, "rule": "reduced_cost"})
+            self.root_fixed.append(fixed)
 
     def fix_rule(self, node: int, proof: int) -> None:
         """Reduced-cost fixing at ``node`` with ``proof``."""
@@ -181,8 +184,39 @@ class ProofLog:
             if self.best_root is None:
                 raise CertificateError("the root has no proof")
             self.nodes[0].proof = self.best_root[1]
+            full = self.nodes[0].fix
+            self.nodes[0].fix = self._needed_fixings(self.proofs[self.best_root[1]])
+            cert = self._write(problem, tour, value, cutoff)
+            try:  # fewer fixings are a shorter proof only if it still holds
+                check_certificate(problem.instance, cert)
+                return cert
+            except ProofError:
+                self.nodes[0].fix = full
         for k in open_nodes:
             self.close_unsolved(k)
+        return self._write(problem, tour, value, cutoff)
+
+    def _needed_fixings(self, leaf: RawProof) -> list[dict[str, Any]]:
+        """The root fixings that fixed a column whose reduced cost at ``leaf`` is not clearly
+        positive (the others leave the leaf's bound as it is when free)."""
+        model, n, m = self.model, self.model.n_nodes, self.model.n_clusters
+        fixes = self.nodes[0].fix
+        if not fixes:
+            return []
+        cols = np.unique(np.concatenate(self.root_fixed))
+        u, pi, mu = leaf.duals[:m], leaf.duals[m:m + n], leaf.duals[m + n:]
+        is_y = cols < n
+        ys, es = cols[is_y], cols[~is_y] - n
+        on_edge, on_y = leaf.cuts.dual_weights(model, mu, es)
+        rc = np.empty(len(cols))
+        rc[is_y] = model.cost[ys] - u[model.cluster[ys]] + 2 * pi[ys] - on_y[ys]
+        rc[~is_y] = model.cost[n + es] - pi[model.tail[es]] - pi[model.head[es]] - on_edge
+        needed = np.zeros(model.n_cols, dtype=bool)
+        needed[cols[rc < 1e-6 * max(1.0, float(np.abs(model.cost).max()))]] = True
+        return [f for f, fixed in zip(fixes, self.root_fixed, strict=True) if needed[fixed].any()]
+
+    def _write(self, problem: Any, tour: np.ndarray, value: float, cutoff: float) -> dict[str, Any]:
+        """The certificate of the log as it stands."""
         used = sorted({f["proof"] for nd in self.nodes for f in nd.fix}
                       | {nd.proof for nd in self.nodes if nd.proof is not None})
         renumber = {old: new for new, old in enumerate(used)}
