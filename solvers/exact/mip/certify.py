@@ -184,36 +184,55 @@ class ProofLog:
             if self.best_root is None:
                 raise CertificateError("the root has no proof")
             self.nodes[0].proof = self.best_root[1]
-            full = self.nodes[0].fix
-            self.nodes[0].fix = self._needed_fixings(self.proofs[self.best_root[1]])
+        for k in open_nodes:
+            self.close_unsolved(k)
+        full = self.nodes[0].fix
+        for chained in ((False, True) if len(full) > 1 else ()):
+            self.nodes[0].fix = self._needed_fixings(chained)
             cert = self._write(problem, tour, value, cutoff)
             try:  # fewer fixings are a shorter proof only if it still holds
                 check_certificate(problem.instance, cert)
                 return cert
             except ProofError:
                 self.nodes[0].fix = full
-        for k in open_nodes:
-            self.close_unsolved(k)
         return self._write(problem, tour, value, cutoff)
 
-    def _needed_fixings(self, leaf: RawProof) -> list[dict[str, Any]]:
-        """The root fixings that fixed a column whose reduced cost at ``leaf`` is not clearly
-        positive (the others leave the leaf's bound as it is when free)."""
-        model, n, m = self.model, self.model.n_nodes, self.model.n_clusters
+    def _needed_fixings(self, chained: bool) -> list[dict[str, Any]]:
+        """The root fixings that fixed a column whose reduced cost is not clearly positive at a
+        proof that relies on them (a leaf's, a later fixing's and, if ``chained``, a needed root
+        fixing's own): a column of positive reduced cost leaves a bound as it is when free."""
+        model = self.model
         fixes = self.nodes[0].fix
-        if not fixes:
-            return []
         cols = np.unique(np.concatenate(self.root_fixed))
-        u, pi, mu = leaf.duals[:m], leaf.duals[m:m + n], leaf.duals[m + n:]
+        small = 1e-6 * max(1.0, float(np.abs(model.cost).max()))
+        own = {f["proof"] for f in fixes}
+        todo = {nd.proof for nd in self.nodes if nd.proof is not None}
+        todo |= {f["proof"] for nd in self.nodes[1:] for f in nd.fix} | (todo & own)
+        done: set[int] = set()
+        keep = np.zeros(len(fixes), dtype=bool)
+        while todo:
+            k = todo.pop()
+            done.add(k)
+            needed = np.zeros(model.n_cols, dtype=bool)
+            needed[cols[self._reduced_costs(self.proofs[k], cols) < small]] = True
+            for i, fixed in enumerate(self.root_fixed):
+                if not keep[i] and needed[fixed].any():
+                    keep[i] = True
+                    if chained and fixes[i]["proof"] not in done:
+                        todo.add(fixes[i]["proof"])
+        return [f for f, kept in zip(fixes, keep, strict=True) if kept]
+
+    def _reduced_costs(self, proof: RawProof, cols: np.ndarray) -> np.ndarray:
+        """Reduced costs of model columns ``cols`` at a logged LP's duals."""
+        model, n, m = self.model, self.model.n_nodes, self.model.n_clusters
+        u, pi, mu = proof.duals[:m], proof.duals[m:m + n], proof.duals[m + n:]
         is_y = cols < n
         ys, es = cols[is_y], cols[~is_y] - n
-        on_edge, on_y = leaf.cuts.dual_weights(model, mu, es)
+        on_edge, on_y = proof.cuts.dual_weights(model, mu, es)
         rc = np.empty(len(cols))
         rc[is_y] = model.cost[ys] - u[model.cluster[ys]] + 2 * pi[ys] - on_y[ys]
         rc[~is_y] = model.cost[n + es] - pi[model.tail[es]] - pi[model.head[es]] - on_edge
-        needed = np.zeros(model.n_cols, dtype=bool)
-        needed[cols[rc < 1e-6 * max(1.0, float(np.abs(model.cost).max()))]] = True
-        return [f for f, fixed in zip(fixes, self.root_fixed, strict=True) if needed[fixed].any()]
+        return rc
 
     def _write(self, problem: Any, tour: np.ndarray, value: float, cutoff: float) -> dict[str, Any]:
         """The certificate of the log as it stands."""
