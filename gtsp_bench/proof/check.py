@@ -74,7 +74,7 @@ class CheckResult:
     def summary(self) -> str:
         """One line: ``proven optimal: VALUE`` or the certified gap."""
         if self.integral and self.proven:
-            return f"proven optimal: {self.value:g}"
+            return f"proven optimal: {self.value:.12g}"
         pct = 100 * self.gap / max(abs(self.value), 1e-12)
         if self.proven:
             return f"proven optimal: {self.value:.10g} (certified gap {self.gap:.3g}, {pct:.2g} %)"
