@@ -163,12 +163,12 @@ class _Search:
         self.report()
 
     # -------------------------------------------------------------- helpers
-    def record(self, res: LpResult | None) -> int:
-        """Log the duals of ``res`` (its Farkas ray when infeasible, ``None``: the last LP's);
-        the proof's index (-1 without a log)."""
+    def record(self, res: LpResult) -> int:
+        """Log the duals of the LP just solved (``res``; the backend's Farkas ray when it is
+        infeasible); the proof's index (-1 without a log)."""
         if self.log is None:
             return -1
-        if res is None or res.status == "infeasible":
+        if res.status == "infeasible":
             ray = self.lp.backend.dual_ray()  # type: ignore[attr-defined]
             if ray is None:
                 raise CertificateError("an infeasible LP without a Farkas ray")
