@@ -414,8 +414,10 @@ class _Search:
             res = self.solve_lp(cutoff=cutoff)
             self.stats["node_lps"] = self.stats.get("node_lps", 0) + 1
             if res.status == "infeasible" and len(absent):  # only the columns in the LP are
-                lp.add_cols(absent)
-                continue
+                repair = self._farkas_price(absent)
+                if len(repair):
+                    lp.add_cols(repair)
+                    continue
             if res.status in ("infeasible", "cutoff"):
                 return self._leaf(res)
             if res.values is None or res.reduced_costs is None or res.duals is None:
@@ -466,6 +468,17 @@ class _Search:
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
+
+    def _farkas_price(self, absent: np.ndarray) -> np.ndarray:
+        """After an LP infeasible over its columns: the absent columns that could make it feasible
+        (negative reduced cost at zero cost under the Farkas ray; all of them when the backend
+        gives no ray). None: the ray shows the whole node infeasible."""
+        ray_of = getattr(self.lp.backend, "dual_ray", None)
+        ray = None if ray_of is None else ray_of()
+        if ray is None:
+            return absent
+        r = self.lp.reduced_costs(ray, absent) - self.model.cost[absent]
+        return absent[r < -TOL]
 
     def _leaf(self, res: LpResult) -> None:
         """The node is closed by ``res`` (its duals or Farkas ray): logged."""
