@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 from gtsp_bench import __version__
 from gtsp_bench.checks import arg_float, arg_float_or_none, arg_int, arg_key_value, arg_seed
 from gtsp_bench.cli.bench import add_bench_parser
-from gtsp_bench.cli.proof import add_check_proof_parser
+from gtsp_bench.cli.proof import add_check_proof_parser, run_check_proof
 from gtsp_bench.errors import InputError, OneLineParser, SolverError
 
 if TYPE_CHECKING:
@@ -189,7 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = add_bench_parser(sub)
     p.set_defaults(handler=_cmd_bench)
 
-    add_check_proof_parser(sub)
+    p = add_check_proof_parser(sub)
+    p.set_defaults(handler=_cmd_check_proof)
 
     p = sub.add_parser("solvers", help="list the registered solvers",
                        description="List the registered solvers, one line each.")
@@ -452,6 +453,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from gtsp_bench.cli.bench import run_bench_command
 
     return run_bench_command(args, _answer if _answer is not None else sys.stdout, args.argv)
+
+
+def _cmd_check_proof(args: argparse.Namespace) -> int:
+    return run_check_proof(args, _answer if _answer is not None else sys.stdout)
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:

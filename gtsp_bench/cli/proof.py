@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TextIO
 
 DESCRIPTION = """\
 Check a proof certificate written by 'gtsp-bench solve FILE --solver milp --certificate CERT':
@@ -25,13 +26,12 @@ def add_check_proof_parser(sub: argparse._SubParsersAction) -> argparse.Argument
                        description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("instance", metavar="INSTANCE", help="the instance file the proof is about")
     p.add_argument("certificate", metavar="CERT", help="the certificate (.cert.json.gz)")
-    p.set_defaults(handler=run_check_proof)
     return p
 
 
-def run_check_proof(args: argparse.Namespace) -> int:
-    """Check ``args.certificate`` against ``args.instance``; the exit code."""
-    from gtsp_bench.cli import _say
+def run_check_proof(args: argparse.Namespace, out: TextIO) -> int:
+    """Check ``args.certificate`` against ``args.instance``, writing the answer line on ``out``;
+    the exit code."""
     from gtsp_bench.data.io import read_instance
     from gtsp_bench.errors import InputError
     from gtsp_bench.proof import ProofError, check_certificate
@@ -44,8 +44,8 @@ def run_check_proof(args: argparse.Namespace) -> int:
     except InputError as e:
         raise InputError(f"{args.certificate}: {e}") from None
     except ProofError as e:
-        _say(f"not proven: {e}")
+        out.write(f"not proven: {e}\n")
         print(f"gtsp-bench: {args.certificate}: the certificate fails: {e}", file=sys.stderr)
         return 1
-    _say(result.summary())
+    out.write(result.summary() + "\n")
     return 0 if result.proven or not result.integral else 1

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import is_int
 from gtsp_bench.problem import Problem
 from gtsp_bench.proof.families import Blossom, Cut, Gsec
 
@@ -117,7 +118,7 @@ def _sparse(entries: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]
     idx, val = [], []
     for e in entries:
         if (not isinstance(e, list) or len(e) != 2
-                or not all(isinstance(v, int) and not isinstance(v, bool) for v in e)
+                or not all(is_int(v) for v in e)
                 or not 0 <= e[0] < size):
             raise ValueError(f"{what}: {e!r} is not [index in [0, {size}), integer]")
         idx.append(e[0])

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
+from gtsp_bench.checks import is_int
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.instance import Instance
@@ -84,7 +85,7 @@ class CheckResult:
 
 def _field(cert: dict[str, Any], key: str, kind: type | tuple[type, ...]) -> Any:
     value = cert.get(key)
-    if not isinstance(value, kind) or isinstance(value, bool):
+    if not isinstance(value, kind) or value is True or value is False:
         raise InputError(f"certificate field {key!r} is missing or malformed")
     return value
 
@@ -98,7 +99,7 @@ class _Checker:
         self.cache: OrderedDict[int, Priced] = OrderedDict()
 
     def priced(self, k: Any, where: str) -> Priced:
-        if not isinstance(k, int) or isinstance(k, bool) or not 0 <= k < len(self.proofs):
+        if not is_int(k) or not 0 <= k < len(self.proofs):
             raise ProofError(f"{where}: proof {k!r} does not exist")
         if k in self.cache:
             self.cache.move_to_end(k)
@@ -176,7 +177,7 @@ def _tree(nodes: Any) -> dict[int, list[int]]:
             if parent is not None or "branch" in node:
                 raise ProofError("node 0 (the root) has a parent or a branching")
             continue
-        if not isinstance(parent, int) or isinstance(parent, bool) or not 0 <= parent < k:
+        if not is_int(parent) or not 0 <= parent < k:
             raise ProofError(f"node {k}: its parent must be an earlier node")
         children[parent].append(k)
     return children

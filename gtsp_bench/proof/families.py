@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import is_int
+
 #: The families, by the name a certificate uses.
 FAMILIES = ("gsec", "blossom")
 
@@ -80,7 +82,7 @@ Cut = Gsec | Blossom
 def _ints(value: Any, what: str, low: int, high: int) -> np.ndarray:
     """A non-empty list of distinct integers in ``[low, high)``."""
     if (not isinstance(value, list) or not value
-            or not all(isinstance(v, int) and not isinstance(v, bool) for v in value)):
+            or not all(is_int(v) for v in value)):
         raise ValueError(f"{what} must be a non-empty list of integers")
     arr = np.array(value, dtype=np.int64)
     if arr.min() < low or arr.max() >= high:
@@ -120,7 +122,7 @@ def parse_cut(cut: Any, cluster_of: np.ndarray) -> Cut:
             raise ValueError("Q holds every node (it must be a proper subset)")
         c1, c2 = cut.get("C1"), cut.get("C2")
         for name, c in (("C1", c1), ("C2", c2)):
-            if not isinstance(c, int) or isinstance(c, bool) or not 0 <= c < m:
+            if not is_int(c) or not 0 <= c < m:
                 raise ValueError(f"{name} must be a cluster in [0, {m})")
         if c1 == c2:
             raise ValueError("C1 and C2 are the same cluster")
@@ -138,7 +140,7 @@ def parse_cut(cut: Any, cluster_of: np.ndarray) -> Cut:
     pairs = []
     for t in teeth:
         if (not isinstance(t, list) or len(t) != 2
-                or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v < m for v in t)):
+                or not all(is_int(v) and 0 <= v < m for v in t)):
             raise ValueError(f"tooth {t!r} is not a pair of clusters")
         if not (handle[t[0]] and not handle[t[1]]):
             raise ValueError(f"tooth {t!r} does not go from the handle to outside it")

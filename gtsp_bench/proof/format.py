@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from gtsp_bench.checks import is_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.problem import Problem
 
@@ -109,7 +110,7 @@ def parse_var(var: Any, n_nodes: int, cluster_of: np.ndarray) -> tuple[int, int]
     ValueError
         For anything else (unknown node, ``i >= j``, an edge inside one cluster).
     """
-    ok = isinstance(var, list) and all(isinstance(v, int) and not isinstance(v, bool) for v in var[1:])
+    ok = isinstance(var, list) and all(is_int(v) for v in var[1:])
     if ok and len(var) == 2 and var[0] == "y" and 0 <= var[1] < n_nodes:
         return int(var[1]), -1
     if (ok and len(var) == 3 and var[0] == "x" and 0 <= var[1] < var[2] < n_nodes

@@ -16,12 +16,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-
-from gtsp_bench.errors import InputError
-from gtsp_bench.instance import Instance
-from gtsp_bench.problem import Problem, price
-from gtsp_bench.proof.format import write_certificate
-from gtsp_bench.solver import Progress, Solution, no_progress
 from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend
 from gtsp_bench.solvers.exact.mip.branch_cut import (
@@ -37,6 +31,12 @@ from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
 from gtsp_bench.solvers.heads import optimal_heads
 from gtsp_bench.solvers.heuristics import lns_kernels
+
+from gtsp_bench.errors import InputError
+from gtsp_bench.instance import Instance
+from gtsp_bench.problem import Problem, price
+from gtsp_bench.proof.format import write_certificate
+from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: A float-cost certificate's cutoff lies this share of the value below the proven bound (room
 #: for the rounding between the LP's float bound and the checker's exact one).
@@ -206,10 +206,10 @@ class MipSolver:
 
     def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False,
-                 certificate: str | os.PathLike[str] | None = None) -> None:
-        self.certificate = certificate
+                 certificate: str | None = None) -> None:
         self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
-                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
+                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose,
+                                  certificate=None if certificate is None else str(certificate))
         # compiled or loaded here (a worker's start-up), not in a solve's clock
         flow.warm_up()
         prune_warm_up()
@@ -229,4 +229,4 @@ class MipSolver:
         problem = price(instance, omega)
         tour = None if initial is None else problem.to_tour(initial.order, initial.heads)
         return solve_exact(problem, self.backend, self.options, time_limit=time_limit, seed=seed,
-                           initial=tour, progress=progress, certificate=self.certificate)
+                           initial=tour, progress=progress, certificate=self.options.certificate)
