@@ -425,6 +425,37 @@ BENCHMARKS: dict[str, Benchmark] = {
             },
         ),
         Benchmark(
+            "exact-frontier",
+            "milp past the published frontier: the symmetric GTSPLIB files of 443-1,084 nodes, "
+            "3,600 s each",
+            (Gtsplib(min_nodes=443, max_nodes=1084),),
+            (run("milp"),),
+            budget=Budget(3600.0),
+            reference=Reference(own_proofs=True),
+            jobs=1,
+            rough_time="20 h",
+            quick={
+                "sources": (Gtsplib(("107si535",)),),
+                "budget": Budget(300.0),
+            },
+        ),
+        Benchmark(
+            "exact-frontier-uav",
+            "milp on the committed UAV sets of K = 100 and 200 (3 instances, omega 0, 0.5, 0.9), "
+            "600 s each: proven or the certified gap",
+            (Committed(("uav-K100-N20-s1", "uav-K200-N20-s1"), 3),),
+            (run("milp"),),
+            omegas=(0.0, 0.5, 0.9),
+            budget=Budget(600.0),
+            reference=Reference(own_proofs=True),
+            jobs=1,
+            rough_time="3 h",
+            quick={
+                "sources": (Committed(("uav-K100-N20-s1",), 1),),
+                "omegas": (0.9,),
+            },
+        ),
+        Benchmark(
             "textbook",
             "the textbook MILP (DFJ, MTZ, flow rows in cvxpy) against milp and dp, K = 4-10",
             (Committed(tuple(f"uav-K{k}-N20-s1" for k in range(4, 11)), 2),),

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 from gtsp_bench import __version__
 from gtsp_bench.checks import arg_float, arg_float_or_none, arg_int, arg_key_value, arg_seed
 from gtsp_bench.cli.bench import add_bench_parser
+from gtsp_bench.cli.proof import add_check_proof_parser, run_check_proof
 from gtsp_bench.errors import InputError, OneLineParser, SolverError
 
 if TYPE_CHECKING:
@@ -43,6 +44,8 @@ examples:
   gtsp-bench solve k7.json --solver dp --omega 0.3 --tour dp.tour
   gtsp-bench plot k7.json --solution sol.json --solution dp.tour --omega 0.3 -o k7.png
   gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver greedy
+  gtsp-bench solve instances/gtsplib/11berlin52.gtsp.gz --solver milp --certificate b.cert.json.gz
+  gtsp-bench check-proof instances/gtsplib/11berlin52.gtsp.gz b.cert.json.gz
   gtsp-bench solvers
   gtsp-bench bench --list
   gtsp-bench bench paper -K 4..10
@@ -104,6 +107,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "gurobi, greedy+ls, ortools and lkh take one")
     p.add_argument("--progress", action="store_true",
                    help="print each improvement (time, objective, bound, gap) on stderr")
+    p.add_argument("--certificate", metavar="CERT.json.gz",
+                   help="milp: write a proof certificate here when the solve proves optimality "
+                   "(check it with 'gtsp-bench check-proof'); the same as -p certificate=PATH")
     p.set_defaults(handler=_cmd_solve)
 
     p = sub.add_parser("evaluate", help="re-price a solution file",
@@ -182,6 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add_bench_parser(sub)
     p.set_defaults(handler=_cmd_bench)
+
+    p = add_check_proof_parser(sub)
+    p.set_defaults(handler=_cmd_check_proof)
 
     p = sub.add_parser("solvers", help="list the registered solvers",
                        description="List the registered solvers, one line each.")
@@ -284,6 +293,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         check_tour_name(args.tour)  # before a long solve
     instance = read_instance(args.file)
     options = dict(args.param)
+    if args.certificate is not None:
+        options["certificate"] = args.certificate
     solver = get_solver(args.solver, **options)
     if instance.is_uav:
         check_omega(args.omega)  # argument errors first: they are not the file's
@@ -317,6 +328,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         atomic_write_text(args.output, text + "\n")
     if args.tour:
         write_tour(instance, args.tour, result.order, result.heads, _tour_comments(result))
+    if "certificate" in options:
+        stats = result.stats or {}
+        done = stats.get("certificate_bytes")
+        print(f"wrote {options['certificate']} ({done} bytes)" if done is not None else
+              f"no certificate: {stats.get('certificate', 'not written')}", file=sys.stderr)
     _say(text if args.json else result.summary())
     return 0
 
@@ -437,6 +453,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from gtsp_bench.cli.bench import run_bench_command
 
     return run_bench_command(args, _answer if _answer is not None else sys.stdout, args.argv)
+
+
+def _cmd_check_proof(args: argparse.Namespace) -> int:
+    return run_check_proof(args, _answer if _answer is not None else sys.stdout)
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:

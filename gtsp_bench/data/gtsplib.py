@@ -58,7 +58,8 @@ class Reference:
         kept since by :func:`keep_tour`).
     status
         ``"optimal"`` (a proven optimum: the symmetric instances up to 442 nodes, Fischetti et al.
-        1997) or ``"best_known"`` (the best tour found, not proven optimal).
+        1997, and larger ones with a shipped :attr:`certificate`) or ``"best_known"`` (the best
+        tour found, not proven optimal).
     type
         ``GTSP``, ``AGTSP`` (asymmetric costs) or ``TSP`` as the file says.
     edge_weight_type, edge_weight_format

@@ -15,20 +15,22 @@ clear error.
 from __future__ import annotations
 
 from gtsp_bench.solvers.exact.mip.backends import GurobiBackend, import_gurobipy
-from gtsp_bench.solvers.exact.mip.branch_cut import MipSolver
 from gtsp_bench.solvers.exact.mip.options import MipOptions
+from gtsp_bench.solvers.exact.mip.solve import MipSolver
 
 
 class Gurobi(MipSolver):
-    """Exact GTSP by MILP with Gurobi (options: :class:`gtsp_bench.solvers.exact.mip.branch_cut.MipSolver`).
+    """Exact GTSP by MILP with Gurobi (options: :class:`gtsp_bench.solvers.exact.mip.solve.MipSolver`).
 
     Raises :class:`InputError` at once when gurobipy is not installed.
     """
 
     def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
-                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
+                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False,
+                 certificate: str | None = None) -> None:
         import_gurobipy()
-        super().__init__(prune, lns_trials, root_rounds, core_edges, abs_gap, verbose)
+        # (a certificate is refused at the solve: Gurobi's own search logs no proof)
+        super().__init__(prune, lns_trials, root_rounds, core_edges, abs_gap, verbose, certificate)
 
     def backend(self, options: MipOptions) -> GurobiBackend:
         """A new, empty Gurobi backend."""

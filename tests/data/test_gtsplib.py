@@ -109,13 +109,16 @@ def test_symmetric_only_solver_refuses_an_agtsp_file():
 
 
 def test_reference_status():
-    """Proven optima exactly for the symmetric instances up to 442 nodes; the five samples keep
-    the status they always had."""
+    """Proven optima exactly for the symmetric instances up to 442 nodes and the larger ones with a
+    shipped certificate; the five samples keep the status they always had."""
     refs = gtsplib.best_known()
     assert len(refs) == 143
     for ref in refs.values():
-        assert ref.proven == (ref.type == "GTSP" and ref.nodes <= 442), ref.name
-    assert [refs[n].status for n in gtsplib.SAMPLES] == ["optimal"] * 4 + ["best_known"]
+        certified = ref.nodes > 442 and bool(ref.certificate)
+        assert ref.proven == ((ref.type == "GTSP" and ref.nodes <= 442) or certified), ref.name
+    assert [refs[n].status for n in gtsplib.SAMPLES[:4]] == ["optimal"] * 4
+    att = refs["107att532"]  # proven beyond 442 nodes only with a shipped certificate
+    assert att.status == ("optimal" if att.certificate else "best_known")
     assert refs["11berlin52"].value == 4040 and refs["107att532"].value == 13464
     assert not refs["4br17"].symmetric and refs["4gr17"].symmetric
     assert sum(not r.symmetric for r in refs.values()) == 19
@@ -242,3 +245,25 @@ def test_optional_reference_columns_default_to_empty():
     ref = gtsplib.parse_best_known(text)["x"]
     assert (ref.value, ref.source, ref.date, ref.certificate) == (3.5, "", "", "")
     assert gtsplib.parse_best_known(gtsplib.format_best_known([ref]))["x"] == ref
+
+
+_CERTIFIED = [r for r in gtsplib.best_known().values() if r.certificate]
+
+
+def test_certificates_are_named_for_proven_rows_and_shipped():
+    assert len(_CERTIFIED) >= 40
+    for ref in _CERTIFIED:
+        assert ref.proven and (GTSPLIB / ref.certificate).is_file(), ref.name
+    shipped = {p.name for p in (GTSPLIB / "proofs").glob("*.cert.json.gz")}
+    assert shipped == {ref.certificate.split("/")[-1] for ref in _CERTIFIED}
+    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 8_000_000
+
+
+@pytest.mark.parametrize("ref", _CERTIFIED, ids=lambda r: r.name)
+def test_shipped_certificates_prove_the_best_known_value(ref):
+    """Each shipped certificate passes the checker and proves the table's value optimal."""
+    from gtsp_bench.proof import check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    result = check_certificate(gtsplib.read(ref.name), read_certificate(GTSPLIB / ref.certificate))
+    assert result.proven and result.value == ref.value

@@ -20,7 +20,7 @@ A tour through three or fewer clusters needs no model: one cyclic order exists, 
 :func:`gtsp_bench.solvers.heads.optimal_heads` gives its optimal heads (one cluster: a single
 node; two: an edge used twice).
 
-:func:`~gtsp_bench.solvers.exact.mip.branch_cut.solve_exact` runs the method on any
+:func:`~gtsp_bench.solvers.exact.mip.solve.solve_exact` runs the method on any
 :class:`~gtsp_bench.solvers.exact.mip.backends.Backend` (a thin LP/MIP wrapper that knows nothing
 of the GTSP):
 

@@ -16,11 +16,11 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.sparse as sp
+
+from gtsp_bench.errors import InputError
 from gtsp_bench.solvers.exact.mip.model import TOL, GtspModel
 from gtsp_bench.solvers.exact.mip.options import MipOptions
 from gtsp_bench.solvers.exact.mip.separation import Cuts
-
-from gtsp_bench.errors import InputError
 
 #: Fewest simplex iterations after which a HiGHS run counts as stalled (see
 #: :meth:`HighsBackend.solve_lp`). UAV K = 50, omega 0.9: of 198 LPs that finished, the median took
@@ -86,7 +86,7 @@ class Backend(Protocol):
     It starts empty. Columns are bounded in [0, 1] and numbered in the order added; rows are
     numbered in the order added (deleting rows renumbers the later ones). A
     :class:`LazyMipBackend` also solves the MILP itself; for any other,
-    :func:`gtsp_bench.solvers.exact.mip.branch_cut.solve_exact` branches, with the backend as LP
+    :func:`gtsp_bench.solvers.exact.mip.solve.solve_exact` branches, with the backend as LP
     solver.
     """
 
@@ -172,6 +172,8 @@ class LpModel:
         self.cuts = Cuts.empty(model.n_nodes)
         self.slack_age = np.zeros(0, dtype=np.int64)
         self.col_age = np.zeros(0, dtype=np.int64)  # LPs with a large reduced cost (columns.py)
+        self.cut_ids = np.zeros(0, dtype=np.int64)  # a number per cut row, never reused
+        self._next_id = 0
         base, rhs = model.base_rows(np.zeros(0, dtype=np.int64))
         backend.add_rows(base.tocsr(), rhs, rhs)
         self.add_cols(cols)
@@ -190,6 +192,8 @@ class LpModel:
         matrix = sp.csr_array(cuts.sparse(self.model, self.cols))
         self.backend.add_rows(matrix, np.full(len(cuts), -np.inf), cuts.rhs)
         self.cuts = Cuts.stack([self.cuts, cuts])
+        self.cut_ids = np.concatenate([self.cut_ids, self._next_id + np.arange(len(cuts))])
+        self._next_id += len(cuts)
         self.slack_age = np.concatenate([self.slack_age, np.zeros(len(cuts), dtype=np.int64)])
 
     def purge(self, values: np.ndarray, age: int) -> None:
@@ -200,6 +204,7 @@ class LpModel:
         if old.any():
             self.backend.delete_rows(self.model.n_base_rows + np.flatnonzero(old))
             self.cuts, self.slack_age = self.cuts.select(~old), self.slack_age[~old]
+            self.cut_ids = self.cut_ids[~old]
 
     def drop_cols(self, positions: np.ndarray) -> None:
         """Delete backend columns ``positions`` (fixed to 0 or priced out: the search prices every
@@ -240,7 +245,7 @@ class HighsBackend:
     """A ``highspy.Highs`` object behind the :class:`Backend` protocol.
 
     It is an LP solver only: highspy has no working lazy constraints, so
-    :func:`gtsp_bench.solvers.exact.mip.branch_cut.solve_exact` branches itself (HiGHS's own MILP, re-solved
+    :func:`gtsp_bench.solvers.exact.mip.solve.solve_exact` branches itself (HiGHS's own MILP, re-solved
     after each subtour solution, stalled on instances whose root gap stayed open).
     """
 
@@ -319,6 +324,12 @@ class HighsBackend:
             return self._run(2**31 - 1)
         finally:
             self.h.setOptionValue("solver", "choose")
+
+    def dual_ray(self) -> np.ndarray | None:
+        """After an infeasible LP: a Farkas ray over the rows (``w`` with ``b'w + sum_j min(-a_j'w
+        l_j, -a_j'w u_j) > 0``), or ``None`` when HiGHS has none."""
+        _, has, ray = self.h.getDualRay()
+        return np.array(ray) if has else None
 
     def solve_lp(self, time_limit: float, cutoff: float = np.inf,
                  iterations: int | None = None) -> LpResult:

@@ -1,11 +1,10 @@
-"""The exact search: root loop, branch and cut (or the backend's own MILP), and the solver base.
+"""The exact search: root loop, branch and cut (or the backend's own MILP).
 
-:func:`solve_exact` takes an upper bound from the large neighbourhood search, prunes candidate
-heads, runs the root LP loop (pricing, reduced-cost fixing, separation, purging) and, unless the
-root proved the upper bound optimal, either branches itself with the backend as LP solver or,
-for a :class:`~gtsp_bench.solvers.exact.mip.backends.LazyMipBackend`, lets the backend solve the
-MILP with lazy subtour rows. :class:`MipSolver` is the base of the ``milp`` and ``gurobi``
-solvers.
+:class:`_Search` holds one solve's state: the root LP loop (pricing, reduced-cost fixing,
+separation, purging), the branch and cut with the backend as LP solver or, for a
+:class:`~gtsp_bench.solvers.exact.mip.backends.LazyMipBackend`, the backend's own MILP with lazy
+subtour rows. With a :class:`~gtsp_bench.solvers.exact.mip.certify.ProofLog` it records every
+proof it relies on. :func:`gtsp_bench.solvers.exact.mip.solve.solve_exact` drives it.
 """
 
 from __future__ import annotations
@@ -13,27 +12,23 @@ from __future__ import annotations
 import heapq
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from gtsp_bench.solvers.exact.mip import branching, columns, flow
+from gtsp_bench.solvers.exact.mip import branching, columns
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend, LpModel, LpResult
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose
+from gtsp_bench.solvers.exact.mip.certify import CertificateError, ProofLog
 from gtsp_bench.solvers.exact.mip.model import TOL, build_model, core_columns
-from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.options import MipOptions
 from gtsp_bench.solvers.exact.mip.separation import Cuts, separate, subtour_cuts
 from gtsp_bench.solvers.exact.mip.tree import Node
-from gtsp_bench.solvers.exact.prune import prune_heads
-from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
-from gtsp_bench.solvers.heads import optimal_heads
-from gtsp_bench.solvers.heuristics import lns_kernels
 
 from gtsp_bench.errors import InputError
-from gtsp_bench.instance import Instance
-from gtsp_bench.problem import Problem, price
-from gtsp_bench.solver import Progress, Solution, no_progress
+from gtsp_bench.problem import Problem
+from gtsp_bench.solver import Progress, no_progress
 
 #: Columns priced into the root LP per round, per node.
 PRICE_PER_NODE = 2
@@ -146,7 +141,7 @@ class _Search:
 
     def __init__(self, problem: Problem, backend: Backend, options: MipOptions, deadline: float,
                  tour: np.ndarray, kept: Sequence[np.ndarray], stats: dict[str, Any],
-                 progress: Progress = no_progress) -> None:
+                 progress: Progress = no_progress, certify: bool = False) -> None:
         self.problem, self.options, self.deadline, self.stats = problem, options, deadline, stats
         self.progress = progress
         self.model = model = build_model(problem, kept)
@@ -160,9 +155,27 @@ class _Search:
         self.codes = np.full(model.n_cols, -1, dtype=np.int8)  # the node in the LP, per model column
         self.pinned = np.zeros(model.n_cols, dtype=bool)  # branched on: never dropped
         self.pseudo = PseudoCosts(model.n_cols)
+        #: The proofs the search relies on, when it writes a certificate (no LP cutoffs then).
+        self.log = ProofLog(model) if certify else None
+        self.cid = 0  # the node being solved, in the log
+        self.strong_proofs: dict[tuple[int, int], int] = {}  # (backend column, value) -> proof
+        self.open_cids: list[int] = []  # nodes left open at the end, closed by their parent's bound
         self.report()
 
     # -------------------------------------------------------------- helpers
+    def record(self, res: LpResult) -> int:
+        """Log the duals of the LP just solved (``res``; the backend's Farkas ray when it is
+        infeasible); the proof's index (-1 without a log)."""
+        if self.log is None:
+            return -1
+        if res.status == "infeasible":
+            ray = self.lp.backend.dual_ray()  # type: ignore[attr-defined]
+            if ray is None:
+                raise CertificateError("an infeasible LP without a Farkas ray")
+            return self.log.proof("farkas", ray, self.lp.cuts, self.lp.cut_ids)
+        assert res.duals is not None
+        return self.log.proof("dual", res.duals, self.lp.cuts, self.lp.cut_ids)
+
     def report(self) -> None:
         """Tell ``progress`` the incumbent's cost and the bound (at most that cost: reduced-cost
         fixing may push the bound above an incumbent it has proven optimal)."""
@@ -234,6 +247,9 @@ class _Search:
             rc[lp.cols] = res.reduced_costs
             rc[absent] = lp.reduced_costs(res.duals, np.flatnonzero(absent))
             bound = res.objective + np.minimum(rc[absent], 0).sum()  # Lagrangian bound
+            proof = self.record(res)
+            if self.log is not None:
+                self.log.root_round(bound, proof)
             self.lb = max(self.lb, bound)
             self.report()
             bounds.append(self.lb)
@@ -241,6 +257,8 @@ class _Search:
                 break
             fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
             if fix.any():  # fixed columns leave the LP (their nonzeros slow every LP down)
+                if self.log is not None:
+                    self.log.root_round(bound, proof, np.flatnonzero(fix))
                 self.fixed |= fix
                 lp.drop_cols(np.flatnonzero(fix[lp.cols]))
             price = np.flatnonzero(absent & ~fix & (rc < -TOL))
@@ -315,7 +333,7 @@ class _Search:
         """
         lp = self.lp
         heap: list[Node] = []
-        node: Node | None = Node(self.lb, 0, self.codes)
+        node: Node | None = Node(self.lb, 0, self.codes)  # (the log's root, ``cid`` 0)
         seq = explored = 0
         popped = False  # whether ``node`` came from the heap (a jump), not a dive or the same node
         while node is not None and not self.proven and self.left() > 0:
@@ -328,6 +346,7 @@ class _Search:
                     lp.backend.start_cold()
                     self.stats["jumps"] = self.stats.get("jumps", 0) + 1
                 self.codes = node.fixes
+                self.cid = node.cid
                 explored += 1
                 outcome = self._node_loop(node.branched)
                 if outcome == "stopped":
@@ -336,9 +355,12 @@ class _Search:
                 if isinstance(outcome, tuple) and len(outcome) == 2:  # the same node, one more fix
                     fixes, key = self.codes.copy(), int(lp.cols[outcome[0]])
                     fixes[key], self.pinned[key] = int(outcome[1]), True
-                    node = Node(node.bound, node.seq, fixes)
+                    if self.log is not None:
+                        empty_side = self.strong_proofs[(outcome[0], 1 - int(outcome[1]))]
+                        self.log.fix_var(node.cid, empty_side, key, int(outcome[1]))
+                    node = Node(node.bound, node.seq, fixes, cid=node.cid)
                     continue
-                node = None
+                cid, node = node.cid, None
                 if isinstance(outcome, tuple) and len(outcome) == 5:
                     bound, col, value, frac, fix = outcome
                     base = self.codes.copy()
@@ -353,12 +375,17 @@ class _Search:
                         children.append(child)
                     seq += 2
                     best_other = heap[0].bound if heap else bound
-                    heapq.heappush(heap, Node(bound, seq, children[1], (key, second == 1, frac, bound)))
-                    node = Node(bound, seq - 1, children[0], (key, first == 1, frac, bound))
+                    cids = (0, 0) if self.log is None else (self.log.child(cid, key, first),
+                                                            self.log.child(cid, key, second))
+                    heapq.heappush(heap, Node(bound, seq, children[1], (key, second == 1, frac, bound),
+                                              cids[1]))
+                    node = Node(bound, seq - 1, children[0], (key, first == 1, frac, bound), cids[0])
                     if bound > best_other + DIVE_SHARE * (self.ub - best_other):  # no dive: far up
                         heapq.heappush(heap, node)
                         node = None
             else:
+                if self.log is not None:  # its parent's bound closes it
+                    self.open_cids.append(node.cid)
                 node = None
             popped = node is None and bool(heap)
             if popped:
@@ -369,6 +396,7 @@ class _Search:
             self.lb = max(self.lb, min(best_open, self.ub - self.gap))
             self.report()
         self.stats["bc_nodes"] = explored
+        self.open_cids += [n.cid for n in heap] + ([node.cid] if node is not None else [])
 
     def _node_loop(self, branched: tuple[int, bool, float, float] | None = None
                    ) -> tuple[float, int, float, float, np.ndarray] | tuple[int, float] | str | None:
@@ -382,10 +410,16 @@ class _Search:
         while self.left() > 0:
             absent = self.absent()
             # with columns absent, only the Lagrangian bound (below) may prune: no LP cutoff
-            res = self.solve_lp(cutoff=self.ub - self.gap if len(absent) == 0 else math.inf)
+            cutoff = self.ub - self.gap if len(absent) == 0 and self.log is None else math.inf
+            res = self.solve_lp(cutoff=cutoff)
             self.stats["node_lps"] = self.stats.get("node_lps", 0) + 1
+            if res.status == "infeasible" and len(absent):  # only the columns in the LP are
+                repair = self._farkas_price(absent)
+                if len(repair):
+                    lp.add_cols(repair)
+                    continue
             if res.status in ("infeasible", "cutoff"):
-                return None
+                return self._leaf(res)
             if res.values is None or res.reduced_costs is None or res.duals is None:
                 return "stopped"
             if branched is not None:  # the node's first LP: the branching's gain
@@ -396,7 +430,7 @@ class _Search:
             if len(absent):
                 rc = lp.reduced_costs(res.duals, absent)
                 if res.objective + np.minimum(rc, 0).sum() > self.ub - self.gap:
-                    return None
+                    return self._leaf(res)
                 price = rc < -TOL
                 if price.any():
                     if _is_integral(values) and subtour_cuts(self.model, values) is None:
@@ -404,7 +438,7 @@ class _Search:
                     lp.add_cols(absent[price][np.argsort(rc[price])[:PRICE_PER_NODE * self.model.n_nodes]])
                     continue
             if res.objective > self.ub - self.gap:
-                return None
+                return self._leaf(res)
             if self.left() <= 0:
                 return "stopped"
             history.append(res.objective)
@@ -413,22 +447,55 @@ class _Search:
             if new is None:
                 if _is_integral(values):
                     self.offer(values)
-                    return None
+                    return self._leaf(res)
+                proof = self.record(res)  # (before strong branching's LPs)
                 rc = res.reduced_costs
                 fix = np.flatnonzero((res.objective + rc > self.ub - self.gap + self.margin)
                                      & (res.values < TOL))
                 choice = self._branching(res.values, res.objective)
                 if choice is None:
+                    if self.log is not None:
+                        self._both_empty()
                     return None
                 col, value, only = choice
                 if only:  # the other child is empty: fix the column here and go on
                     return col, value
+                if self.log is not None:
+                    self.log.fix_rule(self.cid, proof)
                 return res.objective, col, value, float(res.values[col]), fix
             dropped = columns.drop_stale(lp, res.reduced_costs, self.ub - res.objective, self.pinned)
             self.stats["cols_dropped"] = self.stats.get("cols_dropped", 0) + dropped
             lp.purge(values, 10)
             lp.add_cuts(new)
         return "stopped"
+
+    def _farkas_price(self, absent: np.ndarray) -> np.ndarray:
+        """After an LP infeasible over its columns: the absent columns that could make it feasible
+        (negative reduced cost at zero cost under the Farkas ray; all of them when the backend
+        gives no ray). None: the ray shows the whole node infeasible."""
+        ray_of = getattr(self.lp.backend, "dual_ray", None)
+        ray = None if ray_of is None else ray_of()
+        if ray is None:
+            return absent
+        r = self.lp.reduced_costs(ray, absent) - self.model.cost[absent]
+        return absent[r < -TOL]
+
+    def _leaf(self, res: LpResult) -> None:
+        """The node is closed by ``res`` (its duals or Farkas ray): logged."""
+        if self.log is not None:
+            self.log.leaf(self.cid, self.record(res))
+
+    def _both_empty(self) -> None:
+        """Log the node's closing by strong branching: a column both of whose children are empty."""
+        assert self.log is not None
+        for (col, v), proof in self.strong_proofs.items():
+            other = self.strong_proofs.get((col, 1 - v))
+            if v == 0 and other is not None:
+                key = int(self.lp.cols[col])
+                self.log.leaf(self.log.child(self.cid, key, 0), proof)
+                self.log.leaf(self.log.child(self.cid, key, 1), other)
+                return
+        raise CertificateError("strong branching closed a node without two empty children")
 
     def _child_is_empty(self, res: LpResult, absent: np.ndarray) -> bool:
         """Whether a strong-branching child's LP shows that it holds nothing below the incumbent
@@ -450,9 +517,11 @@ class _Search:
         for v in (0.0, 1.0):
             backend.set_bounds(np.array([col]), np.array([v]), np.array([v]))
             res = self.solve_lp(iterations=STRONG_ITERATIONS)
+            empty.append(self._child_is_empty(res, absent))
+            if empty[-1] and self.log is not None:  # (its ray before the basis is reset)
+                self.strong_proofs[(col, int(v))] = self.record(res)
             if restore or res.status == "stopped":
                 backend.set_basis(start)
-            empty.append(self._child_is_empty(res, absent))
             if res.status == "stopped" and math.isfinite(res.objective):  # a guide only
                 self.stats["strong_partial"] = self.stats.get("strong_partial", 0) + 1
                 child.append(max(objective, res.objective))
@@ -472,6 +541,7 @@ class _Search:
         the two children's gains (:func:`~gtsp_bench.solvers.exact.mip.branching.choose`): all
         strong-branched while strong-branching LPs mostly finish, else reliability branching.
         """
+        self.strong_proofs.clear()
         is_y = self.lp.cols < self.model.n_nodes
         frac = np.abs(values - np.round(values)) > 1e-6
         for group in (is_y, ~is_y):
@@ -496,150 +566,3 @@ class _Search:
             key = "strong_pruned" if choice is None else "strong_fixed"
             self.stats[key] = self.stats.get(key, 0) + 1
         return None if choice is None else (choice.col, choice.value, choice.only)
-
-
-def solve_exact(
-    problem: Problem,
-    make_backend: Callable[[MipOptions], Backend],
-    options: MipOptions,
-    *,
-    time_limit: float | None = None,
-    seed: int = 0,
-    initial: np.ndarray | None = None,
-    progress: Progress = no_progress,
-) -> Solution:
-    """Solve a priced GTSP to proven optimality (or until ``time_limit`` seconds).
-
-    Parameters
-    ----------
-    problem
-        The priced problem (symmetric edge costs).
-    make_backend
-        Builds an empty backend.
-    options
-        Shared options.
-    time_limit
-        Seconds for the whole solve (``None``: no limit).
-    seed
-        Seed of the upper-bound heuristic.
-    initial
-        A warm start's tour (problem node ids): the first incumbent, instead of the LNS tour
-        (the LNS restarts still run when the root does not prove it optimal).
-    progress
-        Told each better incumbent's cost and each better bound (the first upper bound's LNS
-        included).
-
-    Returns
-    -------
-    Solution
-        Status ``"optimal"`` with ``lower_bound`` when proven, else ``"time_limit"`` with the best
-        tour and the best lower bound known (at least :func:`degree_bound`). ``stats`` has seconds per
-        phase, rounds, cuts and backend counters.
-    """
-    check_symmetric(problem)
-    start = time.perf_counter()
-    deadline = math.inf if time_limit is None else start + time_limit
-    stats: dict[str, Any] = {}
-
-    def result(tour: np.ndarray, status: str, lower: float) -> Solution:
-        order, heads = problem.to_solution(tour)
-        cost = problem.tour_cost(tour)
-        stats["total_s"] = time.perf_counter() - start
-        # reduced-cost fixing drops solutions no better than the incumbent, so a bound above
-        # the incumbent's cost only says that it is optimal
-        bound = None if lower == -math.inf else min(float(lower), cost)
-        return Solution(order, heads, objective=cost, status=status, lower_bound=bound, stats=stats)
-
-    if problem.n_clusters <= 3:  # one cyclic order: its optimal heads are the optimum
-        tour, cost = optimal_heads(problem, list(range(problem.instance.n_clusters)))
-        return result(tour, "optimal", cost)
-    if initial is not None:
-        tour = np.asarray(initial, dtype=np.int64)
-        stats["warm_start"] = True
-    else:
-        with _Timer(stats, "heuristic_s"):
-            tour = upper_bound_tour(problem, options.lns_trials, seed,
-                                    None if time_limit is None else 0.25 * time_limit, progress)
-    with _Timer(stats, "prune_s"):
-        # pruning is exact after any number of passes; at K = 50 (N = 20) a full run took 138 s
-        # of a 300 s limit for 11 % of the nodes, so it gets a fifth of the limit at most
-        prune_by = deadline
-        if time_limit is not None:
-            prune_by = min(deadline, time.perf_counter() + PRUNE_SHARE * time_limit)
-        kept = prune_heads(problem, deadline=prune_by) if options.prune else problem.clusters
-    search = _Search(problem, make_backend(options), options, deadline, tour, kept, stats, progress)
-    paused = search.root(None if time_limit is None else start + ROOT_SHARE * time_limit)
-    if not search.proven and search.left() > 0:
-        # the root did not finish (or paused at half the limit): LNS restarts for a small share
-        # of the limit, and the root loop again, against a better incumbent (it fixes more
-        # columns by reduced cost) or to go on where it paused
-        with _Timer(stats, "heuristic_s"):
-            until = None if time_limit is None else min(deadline, time.perf_counter()
-                                                         + RESTART_SHARE * time_limit)
-            better = restart_tours(problem, search.tour, seed, until)
-        if problem.tour_cost(better) < search.ub - search.margin:  # (not a rounding difference)
-            stats["restart_gain"] = search.ub - problem.tour_cost(better)
-            search.tour, search.ub = better, problem.tour_cost(better)
-            search.report()
-            paused = True
-        if paused:
-            search.root()
-    if not search.proven and search.left() > 0:
-        if isinstance(search.lp.backend, LazyMipBackend):
-            search.native_mip()
-        else:
-            search.branch_and_cut()
-    stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
-    stats["lp_stalls"] = getattr(search.lp.backend, "stalls", 0)
-    stats["lp_retries"] = getattr(search.lp.backend, "retries", 0)
-    stats["lp_cold_starts"] = getattr(search.lp.backend, "cold_starts", 0)
-    lower = search.lb
-    if search.model.integral_costs and math.isfinite(lower):
-        lower = math.ceil(lower - 1e-7)  # every tour costs an integer
-    return result(search.tour, "optimal" if search.proven else "time_limit", lower)
-
-
-class MipSolver:
-    """The exact MILP solver on one backend; subclasses name the backend (``milp``, ``gurobi``).
-
-    Parameters
-    ----------
-    prune
-        Remove dominated candidate heads first (exact).
-    lns_trials
-        Trials of the large neighbourhood search giving the first upper bound (0: greedy and
-        local search only).
-    root_rounds
-        Most rounds of the root LP loop (0: no root cuts).
-    core_edges
-        Cheapest edges per node in the first LP (0: all edges).
-    abs_gap
-        Absolute gap under which the optimum counts as proven.
-    verbose
-        Print the backend's log.
-    """
-
-    def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
-                 core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False) -> None:
-        self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
-                                  core_edges=core_edges, abs_gap=abs_gap, verbose=verbose)
-        # compiled or loaded here (a worker's start-up), not in a solve's clock
-        flow.warm_up()
-        prune_warm_up()
-        lns_kernels.warm_up()
-
-    def backend(self, options: MipOptions) -> Backend:
-        """A new, empty backend."""
-        raise NotImplementedError
-
-    def solve(
-        self, instance: Instance, omega: float | None, *, time_limit: float | None = None,
-        seed: int = 0, initial: Solution | None = None, progress: Progress = no_progress,
-    ) -> Solution:
-        """Solve to proven optimality, or return the best tour and bound at ``time_limit``;
-        a warm start (``initial``) is the first incumbent; each better incumbent and bound is
-        reported to ``progress``."""
-        problem = price(instance, omega)
-        tour = None if initial is None else problem.to_tour(initial.order, initial.heads)
-        return solve_exact(problem, self.backend, self.options, time_limit=time_limit, seed=seed,
-                           initial=tour, progress=progress)

@@ -12,6 +12,7 @@ from gtsp_bench.solvers.heuristics.lns import Lns
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, improve
 
 from gtsp_bench.checks import check_bool, check_float, check_int
+from gtsp_bench.errors import InputError
 from gtsp_bench.problem import Problem
 from gtsp_bench.solver import Progress, no_progress
 
@@ -37,6 +38,8 @@ class MipOptions:
         a gap below 1 proves it too).
     verbose
         Print the backend's log.
+    certificate
+        Where a solve that proves optimality writes its proof certificate (``None``: none).
     """
 
     prune: bool = True
@@ -45,6 +48,7 @@ class MipOptions:
     core_edges: int = 10
     abs_gap: float = 1e-6
     verbose: bool = False
+    certificate: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("prune", "verbose"):
@@ -52,6 +56,8 @@ class MipOptions:
         for name in ("lns_trials", "root_rounds", "core_edges"):
             check_int(name, getattr(self, name), 0)
         check_float("abs_gap", self.abs_gap, 0.0, math.inf, open_low=False)
+        if self.certificate is not None and not str(self.certificate):
+            raise InputError("certificate must be a file path")
 
 
 def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None,

@@ -26,9 +26,12 @@ class Node:
     branched
         The branching that made it (model column, up, the column's LP value and the LP bound in
         the parent), for the pseudo-costs.
+    cid
+        Its number in the search's proof log (0 without one).
     """
 
     bound: float
     seq: int
     fixes: np.ndarray = field(compare=False)
     branched: tuple[int, bool, float, float] | None = field(default=None, compare=False)
+    cid: int = field(default=0, compare=False)

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.gurobi import Gurobi
 from gtsp_bench.solvers.exact.milp import Milp
-from gtsp_bench.solvers.exact.mip.branch_cut import MipSolver, check_symmetric, degree_bound, solve_exact
+from gtsp_bench.solvers.exact.mip.branch_cut import check_symmetric, degree_bound
 from gtsp_bench.solvers.exact.mip.options import MipOptions
+from gtsp_bench.solvers.exact.mip.solve import MipSolver, solve_exact
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError

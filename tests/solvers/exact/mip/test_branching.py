@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.mip import branching
 from gtsp_bench.solvers.exact.mip.backends import HighsBackend
-from gtsp_bench.solvers.exact.mip.branch_cut import solve_exact
 from gtsp_bench.solvers.exact.mip.branching import PseudoCosts, StrongResult, choose, score
 from gtsp_bench.solvers.exact.mip.options import MipOptions
+from gtsp_bench.solvers.exact.mip.solve import solve_exact
 
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import price

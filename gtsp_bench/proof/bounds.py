@@ -1,0 +1,263 @@
+"""Exact bounds from dual values: the Lagrangian bound of a dual vector, and Farkas proofs.
+
+For the model ``min c'v`` over tours ``v`` (binary ``y`` and ``x``), rows ``A v (=, <=) b`` valid
+for every tour (cluster and degree equalities, cuts) and a domain ``l <= v <= u`` (variables fixed
+by branching), any dual ``w`` with ``w_k <= 0`` on the ``<=`` rows gives, for every tour ``v`` in
+the domain, ``c'v >= c'v - w'(Av - b) = b'w + r'v >= b'w + sum_j min(r_j l_j, r_j u_j)`` with
+``r = c - A'w``. No optimality of ``w`` is needed, so floats read as exact rationals give a sound
+bound. A Farkas proof is the same with ``c = 0``: a positive value shows that no tour lies in the
+domain.
+
+Duals are integers scaled by ``2**bits``; the scaled ``A'w`` of every column is computed in int64
+(products of 0/1 matrices with duals split into 26-bit halves, exact in float64) and the costs are
+compared and summed exactly (scaled integers for integer costs, fractions otherwise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from gtsp_bench.checks import is_int
+from gtsp_bench.problem import Problem
+from gtsp_bench.proof.families import Blossom, Cut, Gsec
+
+#: Largest magnitude of any scaled sum (int64 with room).
+_LIMIT = 2**62
+#: Bits of the low half when duals are split for an exact float64 product.
+_SPLIT = 26
+
+
+@dataclass(frozen=True)
+class Space:
+    """The model's columns and costs for a priced problem.
+
+    Attributes
+    ----------
+    cluster_of
+        Cluster of each node.
+    node_cost, edge_cost
+        ``(n,)`` and ``(n, n)`` costs (float64, read as exact rationals).
+    edge
+        ``(n, n)`` bool: ``(i, j)`` is a column (``i < j``, two clusters).
+    integral
+        Whether every cost is an integer (then sums are scaled integers).
+    """
+
+    cluster_of: np.ndarray
+    node_cost: np.ndarray
+    edge_cost: np.ndarray
+    edge: np.ndarray
+    integral: bool
+
+    @staticmethod
+    def of(problem: Problem) -> Space:
+        """The space of a priced problem."""
+        c = problem.cluster_of
+        n = len(c)
+        edge = np.triu(c[:, None] != c[None, :], 1)
+        node, cost = np.asarray(problem.node_cost, float), np.asarray(problem.edge_cost, float)
+        integral = bool(np.all(node == np.round(node)) and np.all(cost[edge] == np.round(cost[edge])))
+        return Space(c, node, cost, edge, integral and n > 0)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes."""
+        return len(self.cluster_of)
+
+    @property
+    def n_clusters(self) -> int:
+        """Number of clusters."""
+        return int(self.cluster_of.max()) + 1
+
+
+@dataclass
+class Domain:
+    """Fixed variables: per column -1 (free in [0, 1]) or its value.
+
+    Attributes
+    ----------
+    y
+        ``(n,)`` int8.
+    x
+        ``(n, n)`` int8 (entries ``i < j`` of edge columns are used).
+    """
+
+    y: np.ndarray
+    x: np.ndarray
+
+    @staticmethod
+    def free(space: Space) -> Domain:
+        """Every variable free."""
+        n = space.n_nodes
+        return Domain(np.full(n, -1, np.int8), np.full((n, n), -1, np.int8))
+
+    def copy(self) -> Domain:
+        """An independent copy."""
+        return Domain(self.y.copy(), self.x.copy())
+
+    def get(self, i: int, j: int) -> int:
+        """State of ``y[i]`` (``j < 0``) or ``x[i, j]``."""
+        return int(self.y[i] if j < 0 else self.x[i, j])
+
+    def set(self, i: int, j: int, value: int) -> None:
+        """Fix ``y[i]`` (``j < 0``) or ``x[i, j]`` to ``value`` (-1: free)."""
+        if j < 0:
+            self.y[i] = value
+        else:
+            self.x[i, j] = value
+
+
+def _sparse(entries: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and integer values of ``[[index, value], ...]``."""
+    if not isinstance(entries, list):
+        raise ValueError(f"{what} must be a list of [index, value] pairs")
+    idx, val = [], []
+    for e in entries:
+        if (not isinstance(e, list) or len(e) != 2
+                or not all(is_int(v) for v in e)
+                or not 0 <= e[0] < size):
+            raise ValueError(f"{what}: {e!r} is not [index in [0, {size}), integer]")
+        idx.append(e[0])
+        val.append(e[1])
+    if len(set(idx)) != len(idx):
+        raise ValueError(f"{what}: an index is repeated")
+    if val and max(abs(v) for v in val) >= _LIMIT // 8:
+        raise ValueError(f"{what}: a dual value is too large")
+    return np.array(idx, dtype=np.int64), np.array(val, dtype=np.int64)
+
+
+def _split_product(mask: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``mask.T @ diag(weights) @ mask`` exactly (``mask``: (k, n) 0/1, ``weights``: int64)."""
+    hi = weights >> _SPLIT
+    lo = weights - (hi << _SPLIT)
+    m = mask.astype(np.float64)
+    out = np.rint((m.T * hi.astype(np.float64)) @ m).astype(np.int64) << _SPLIT
+    return out + np.rint((m.T * lo.astype(np.float64)) @ m).astype(np.int64)
+
+
+@dataclass(frozen=True)
+class Priced:
+    """The reduced costs of one dual vector, scaled by ``2**bits``, over a space.
+
+    ``r = c - A'w`` per column; exact values come from :meth:`exact`.
+    """
+
+    space: Space
+    scale: int
+    farkas: bool
+    rhs: int  # b'w, scaled
+    aw_y: np.ndarray  # (n,) int64: A'w of the y columns, scaled
+    aw_x: np.ndarray  # (n, n) int64: A'w of the edge columns, scaled
+
+    def approx(self, x: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Float reduced costs of the y (``x`` false) or edge columns and a bound on their error."""
+        aw = self.aw_x if x else self.aw_y
+        c = self.space.edge_cost if x else self.space.node_cost
+        if self.farkas:
+            c = np.zeros_like(c)
+        awf = aw.astype(np.float64) / self.scale
+        r = c - awf
+        err = (np.abs(c) + np.abs(awf) + np.abs(r)) * 2.0**-50 + 2.0**-1000
+        return r, err
+
+    def exact(self, i: np.ndarray, j: np.ndarray | None) -> list[Fraction]:
+        """Exact reduced costs of y columns ``i`` (``j`` None) or edge columns ``(i, j)``."""
+        aw = self.aw_y[i] if j is None else self.aw_x[i, j]
+        if self.farkas:
+            return [Fraction(-int(a), self.scale) for a in aw]
+        c = self.space.node_cost[i] if j is None else self.space.edge_cost[i, j]
+        if self.space.integral:
+            return [Fraction(round(cc) * self.scale - int(a), self.scale)
+                    for cc, a in zip(c, aw, strict=True)]
+        return [Fraction(float(cc)) - Fraction(int(a), self.scale) for cc, a in zip(c, aw, strict=True)]
+
+    def bound(self, domain: Domain) -> Fraction:
+        """``b'w + sum_j min(r_j l_j, r_j u_j)`` over the domain, exactly."""
+        total = Fraction(self.rhs, self.scale)
+        for is_x, state in ((False, domain.y), (True, domain.x)):
+            r, err = self.approx(is_x)
+            valid = self.space.edge if is_x else np.ones(len(state), dtype=bool)
+            one = np.nonzero(valid & (state == 1))
+            maybe = np.nonzero(valid & (state == -1) & (r < err))
+            for where, clip in ((one, False), (maybe, True)):
+                vals = self.exact(where[0], where[1] if is_x else None)
+                total += sum((min(v, 0) if clip else v for v in vals), Fraction(0))
+        return total
+
+    def fixable(self, domain: Domain, room: Fraction) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """Free columns whose reduced cost exceeds ``room``: fixed to 1 they raise the bound by
+        more than ``room``. Returns the y nodes and the edge index arrays."""
+        out: list[Any] = []
+        t = float(room)
+        tol = abs(t) * 2.0**-50 + 2.0**-1000
+        for is_x, state in ((False, domain.y), (True, domain.x)):
+            r, err = self.approx(is_x)
+            valid = self.space.edge if is_x else np.ones(len(state), dtype=bool)
+            free = valid & (state == -1)
+            sure = free & (r - err > t + tol)
+            unsure = np.nonzero(free & ~sure & (r + err >= t - tol))
+            vals = self.exact(unsure[0], unsure[1] if is_x else None)
+            more = np.array([v > room for v in vals], dtype=bool)
+            sure[tuple(u[more] for u in unsure)] = True
+            out.append(np.nonzero(sure) if is_x else np.flatnonzero(sure))
+        return out[0], out[1]
+
+
+def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int) -> Priced:
+    """The reduced costs of one proof's dual vector.
+
+    Raises
+    ------
+    ValueError
+        A malformed proof, a cut dual above 0 (``<=`` rows need duals at most 0), or values so
+        large that the int64 sums could overflow.
+    """
+    kind = proof.get("kind") if isinstance(proof, dict) else None
+    if kind not in ("dual", "farkas"):
+        raise ValueError(f"kind {kind!r} (valid: dual, farkas)")
+    n, m = space.n_nodes, space.n_clusters
+    cu, cv = _sparse(proof.get("cluster", []), m, "cluster duals")
+    di, dv = _sparse(proof.get("degree", []), n, "degree duals")
+    ki, kv = _sparse(proof.get("cuts", []), len(cuts), "cut duals")
+    if (kv > 0).any():
+        k = int(ki[np.argmax(kv)])
+        raise ValueError(f"the dual of cut {k} is positive (a <= row needs a dual at most 0)")
+    u = np.zeros(m, np.int64)
+    u[cu] = cv
+    pi = np.zeros(n, np.int64)
+    pi[di] = dv
+    if 4 * (int(np.abs(u).max(initial=0)) + 2 * int(np.abs(pi).max(initial=0))
+            + 2 * int(np.abs(kv).sum())) >= _LIMIT:
+        raise ValueError("dual values too large to sum exactly")
+    aw_y = u[space.cluster_of] - 2 * pi
+    aw_x = pi[:, None] + pi[None, :]
+    rhs = int(cv.sum())
+    g_idx = [k for k in range(len(ki)) if isinstance(cuts[ki[k]], Gsec)]
+    if g_idx:
+        rows = [cuts[ki[k]] for k in g_idx]
+        lam = kv[g_idx]
+        members = np.array([c.members for c in rows])
+        aw_x = aw_x + _split_product(members, lam)
+        for c, w in zip(rows, lam, strict=True):
+            aw_y = aw_y + int(w) * c.y_coef(space.cluster_of)
+    pair = np.zeros((m, m), np.int64)
+    for k in range(len(ki)):
+        c = cuts[ki[k]]
+        if isinstance(c, Blossom):
+            w = int(kv[k])
+            h = np.flatnonzero(c.handle)
+            pair[np.ix_(h, h)] += w
+            pair[c.teeth[:, 0], c.teeth[:, 1]] += w
+            pair[c.teeth[:, 1], c.teeth[:, 0]] += w
+            rhs += w * c.rhs
+    if pair.any():
+        aw_x = aw_x + pair[space.cluster_of[:, None], space.cluster_of[None, :]]
+    scale = 2**bits
+    big = float(np.abs(space.edge_cost[space.edge]).max(initial=0)) * scale >= _LIMIT // 4
+    if kind != "farkas" and space.integral and big:
+        raise ValueError("costs too large for the dual scale")
+    return Priced(space, scale, kind == "farkas", rhs, aw_y, aw_x)

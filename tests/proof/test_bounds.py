@@ -1,0 +1,104 @@
+"""Exact bounds: any duals of the right signs bound every tour of the domain from below; the
+arithmetic is exact; Farkas proofs show empty domains; bad duals are refused."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from gtsp_bench.data.io import read_instance
+from gtsp_bench.problem import price
+from gtsp_bench.proof.bounds import Domain, Space, price_duals
+from gtsp_bench.proof.families import Gsec, parse_cut
+from tests.conftest import GTSPLIB
+
+from .test_families import all_tours, random_cuts, tiny
+
+BITS = 20
+
+
+def _random_proof(rng: np.random.Generator, n: int, m: int, n_cuts: int, kind: str = "dual") -> dict:
+    scale = 2**BITS
+    return {"kind": kind,
+            "cluster": [[c, int(rng.integers(-50, 400) * scale // 7)] for c in range(m)],
+            "degree": [[i, int(rng.integers(-100, 100) * scale // 3)] for i in range(n)],
+            "cuts": [[k, -int(rng.integers(0, 80) * scale // 5)] for k in range(n_cuts)]}
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_duals_bound_every_tour_of_the_domain(seed: int) -> None:
+    problem = tiny(seed)
+    rng = np.random.default_rng(seed)
+    space = Space.of(problem)
+    cuts = [parse_cut(c, space.cluster_of) for c in random_cuts(problem, rng, 8)]
+    tours = all_tours(problem)
+    domain = Domain.free(space)
+    i = int(rng.integers(0, 8))  # a branching: y_i = 1, and one edge at i fixed to 0
+    j = int(np.flatnonzero(space.edge[i] | space.edge[:, i])[0])
+    a, b = min(i, j), max(i, j)
+    domain.set(i, -1, 1)
+    domain.set(a, b, 0)
+    inside = [cost for y, x, cost in tours if y[i] == 1 and x[a, b] == 0]
+    for _ in range(5):
+        proof = _random_proof(rng, space.n_nodes, space.n_clusters, len(cuts))
+        priced = price_duals(space, cuts, proof, BITS)
+        assert priced.bound(Domain.free(space)) <= min(c for _, _, c in tours)
+        assert priced.bound(domain) <= min(inside)
+
+
+def test_the_bound_is_exact() -> None:
+    """Against a plain fraction sum over every column (an integer-cost GTSPLIB file)."""
+    problem = price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
+    space = Space.of(problem)
+    assert space.integral
+    rng = np.random.default_rng(3)
+    cuts = [parse_cut({"family": "gsec", "Q": list(range(5 * k, 5 * k + 9)), "C1": 0, "C2": 9},
+                      space.cluster_of) for k in range(4)]
+    proof = _random_proof(rng, space.n_nodes, space.n_clusters, len(cuts))
+    got = price_duals(space, cuts, proof, BITS).bound(Domain.free(space))
+    scale = Fraction(1, 2**BITS)
+    u = {c: v * scale for c, v in proof["cluster"]}
+    pi = {i: v * scale for i, v in proof["degree"]}
+    lam = [v * scale for _, v in proof["cuts"]]
+    want = sum(u.values(), Fraction(0))
+    for i in range(space.n_nodes):
+        aw = u[int(space.cluster_of[i])] - 2 * pi[i]
+        for c, w in zip(cuts, lam, strict=True):
+            assert isinstance(c, Gsec)
+            aw += w * int(c.y_coef(space.cluster_of)[i])
+        want += min(Fraction(space.node_cost[i]) - aw, 0)
+    for i, j in zip(*np.nonzero(space.edge), strict=True):
+        aw = pi[i] + pi[j] + sum((w for c, w in zip(cuts, lam, strict=True)
+                                  if c.members[i] and c.members[j]), Fraction(0))
+        want += min(Fraction(space.edge_cost[i, j]) - aw, 0)
+    assert got == want
+
+
+def test_farkas_shows_an_empty_domain() -> None:
+    """Two heads in one cluster: the cluster row with dual -1 proves no tour has them."""
+    problem = tiny(0)
+    space = Space.of(problem)
+    a, b = problem.clusters[0][:2]
+    domain = Domain.free(space)
+    domain.set(int(a), -1, 1)
+    domain.set(int(b), -1, 1)
+    ray = {"kind": "farkas", "cluster": [[0, -(2**BITS)]], "degree": [], "cuts": []}
+    priced = price_duals(space, [], ray, BITS)
+    assert priced.bound(domain) == 1  # -1 * 1 + (1 + 1): positive, so the domain is empty
+    assert priced.bound(Domain.free(space)) <= 0  # (a ray shows nothing about a feasible domain)
+
+
+def test_bad_duals_are_refused() -> None:
+    problem = tiny(0)
+    space = Space.of(problem)
+    cut = [parse_cut({"family": "gsec", "Q": [0, 2], "C1": 0, "C2": 1}, space.cluster_of)]
+    with pytest.raises(ValueError, match="dual of cut 0 is positive"):
+        price_duals(space, cut, {"kind": "dual", "cuts": [[0, 5]]}, BITS)
+    with pytest.raises(ValueError, match="kind 'primal'"):
+        price_duals(space, cut, {"kind": "primal"}, BITS)
+    with pytest.raises(ValueError, match="not \\[index in"):
+        price_duals(space, cut, {"kind": "dual", "degree": [[99, 1]]}, BITS)
+    with pytest.raises(ValueError, match="too large"):
+        price_duals(space, cut, {"kind": "dual", "degree": [[0, 2**61]]}, BITS)
