@@ -500,7 +500,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             reference=Reference(own_proofs=True),
             outputs=("update-references",),
             jobs=1,
-            rough_time="days at K >= 50 (600 s per solve)",
+            rough_time="days (K >= 50)",
             quick={
                 "sources": (Committed(("uav-K20-N20-s1",), 1),),
                 "seeds": (0,),

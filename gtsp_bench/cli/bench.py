@@ -96,9 +96,10 @@ def list_text() -> str:
     from gtsp_bench.bench.definitions import BENCHMARKS
 
     width = max(map(len, BENCHMARKS))
-    lines = [f"{'name':<{width}}  {'full run':<12}  what it measures"]
+    time_width = max(len("full run"), *(len(b.rough_time) for b in BENCHMARKS.values()))
+    lines = [f"{'name':<{width}}  {'full run':<{time_width}}  what it measures"]
     for b in BENCHMARKS.values():
-        lines.append(f"{b.name:<{width}}  {b.rough_time:<12}  {b.description}")
+        lines.append(f"{b.name:<{width}}  {b.rough_time:<{time_width}}  {b.description}")
     return "\n".join(lines) + "\n"
 
 

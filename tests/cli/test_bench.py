@@ -74,3 +74,15 @@ def test_every_definition_is_runnable_data():
         assert set(b.outputs) - {"paper"} <= set(OUTPUTS), b.name
         assert set(b.quick) <= valid, b.name
         assert len({r.name for r in b.runs}) == len(b.runs), f"{b.name}: two runs share a label"
+
+
+def test_list_lines_up_its_columns():
+    """--list puts every description in the same column, however long a rough time is."""
+    from gtsp_bench.bench.definitions import BENCHMARKS
+    from gtsp_bench.cli.bench import list_text
+
+    lines = list_text().splitlines()
+    assert len(lines) == len(BENCHMARKS) + 1
+    column = lines[0].index("what it measures")
+    for line, b in zip(lines[1:], BENCHMARKS.values(), strict=True):
+        assert line.index(b.description) == column, b.name
