@@ -49,8 +49,7 @@ bench-%: $(STAMP)
 # hold (about 2 h 30 min on 2 cores, the sum of their full-run times in `gtsp-bench bench --list`;
 # a rerun re-uses every finished solve). glns-large's committed run is its first seed:
 # make bench-glns-large BENCH_ARGS="--seeds 1" (about 45 min on one core).
-BENCH_ALL = paper heuristics-table learned learned-transfer glns lns-effort scale textbook \
-	exact-scale
+BENCH_ALL = paper heuristics-table learned learned-transfer glns lns-effort scale textbook exact-scale
 bench-all: $(STAMP)
 	status=0; for b in $(BENCH_ALL); do \
 		$(BIN)/python -m gtsp_bench.cli bench $$b $(BENCH_ARGS) || status=1; done; exit $$status

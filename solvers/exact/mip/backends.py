@@ -16,11 +16,11 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.sparse as sp
-
-from gtsp_bench.errors import InputError
 from gtsp_bench.solvers.exact.mip.model import TOL, GtspModel
 from gtsp_bench.solvers.exact.mip.options import MipOptions
 from gtsp_bench.solvers.exact.mip.separation import Cuts
+
+from gtsp_bench.errors import InputError
 
 #: Fewest simplex iterations after which a HiGHS run counts as stalled (see
 #: :meth:`HighsBackend.solve_lp`). UAV K = 50, omega 0.9: of 198 LPs that finished, the median took
