@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import torch
-from gtsp_bench.solvers.learned.env import EnvBatch, optimal_heads_batch
+from gtsp_bench.solvers.learned.env import EnvBatch, optimal_heads_batch, unpad_heads
 
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
@@ -75,9 +75,7 @@ def solve_distance(model: torch.nn.Module, instance: Instance, starts: int) -> S
         full = [anchor] + [others[int(c)] for c in order[row]]
         h = np.zeros(instance.n_clusters, dtype=np.int64)
         h[anchor] = row // starts
-        for j, c in enumerate(others):
-            x = int(heads[row, j])
-            h[c] = x if x < sizes[c] else 0
+        h[others] = unpad_heads(heads[row].tolist(), [sizes[c] for c in others])
         value = evaluate(instance, None, full, h.tolist()).objective
         if best is None or value < best.objective:
             best = Solution(tuple(full), tuple(int(x) for x in h), objective=value,

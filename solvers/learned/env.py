@@ -167,6 +167,12 @@ def env_from_instances(instances: Sequence[Instance], omegas: Sequence[float]) -
                     t(np.stack(ground)), t(np.array(edge)))
 
 
+def unpad_heads(heads: Sequence[int], sizes: Sequence[int]) -> tuple[int, ...]:
+    """Heads of a policy's (padded) clusters as the instance's node indices: a padded copy of a
+    cluster's node 0 (an index past the cluster's size) is node 0."""
+    return tuple(int(x) if x < size else 0 for x, size in zip(heads, sizes, strict=True))
+
+
 def mirror(env: EnvBatch) -> EnvBatch:
     """The batch mirrored about the vertical line through each depot: every cost is unchanged."""
     coords = env.coords.clone()

@@ -29,7 +29,12 @@ import time
 import numpy as np
 import torch
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch
-from gtsp_bench.solvers.learned.env import EnvBatch, env_from_instances, optimal_heads_batch
+from gtsp_bench.solvers.learned.env import (
+    EnvBatch,
+    env_from_instances,
+    optimal_heads_batch,
+    unpad_heads,
+)
 from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, turn
 from gtsp_bench.solvers.learned.solver import LearnedSolver
 
@@ -194,8 +199,7 @@ class LocalSearchSolver(LearnedSolver):
                     stall += 1
                 last = time.perf_counter() - t_round
         o = tuple(int(c) for c in order)
-        h = tuple(int(x) if x < size else 0  # padded copies of node 0 are node 0
-                  for x, size in zip(heads.tolist(), instance.sizes, strict=True))
+        h = unpad_heads(heads.tolist(), instance.sizes)
         value = evaluate(instance, omega, o, h).objective
         return Solution(o, h, objective=value, status="feasible",
                         stats={"heads": "optimal", "rounds": rounds, "better": better,
@@ -206,9 +210,9 @@ class LocalSearchSolver(LearnedSolver):
                       cost: float, deadline: float) -> tuple[torch.Tensor, torch.Tensor, float]:
         """The shared local search from the tour; the tour back as policy tensors (heads of
         padded clusters mapped to node 0 first)."""
-        sizes = [len(c) for c in problem.clusters[:-1]]
-        h = [int(x) if x < s else 0 for x, s in zip(heads.tolist(), sizes, strict=True)]
-        tour, new_cost, _ = LocalSearch(problem).run(problem.to_tour(order.tolist(), h), deadline)
+        h = unpad_heads(heads.tolist(), [len(c) for c in problem.clusters[:-1]])
+        tour, new_cost, _ = LocalSearch(problem).run(problem.to_tour(order.tolist(), list(h)),
+                                                     deadline)
         if new_cost >= cost:
             return order, heads, cost
         o, _ = problem.to_solution(tour)

@@ -21,6 +21,7 @@ from gtsp_bench.solvers.learned.env import (
     env_from_instances,
     mirror,
     tour_cost,
+    unpad_heads,
 )
 from torch import nn
 
@@ -138,8 +139,7 @@ class LearnedSolver:
         out = []
         for i, inst in enumerate(instances):
             o = tuple(int(c) for c in order[i])
-            h = tuple(int(x) if x < size else 0  # padded copies of node 0 are node 0
-                      for x, size in zip(heads[i].tolist(), inst.sizes, strict=True))
+            h = unpad_heads(heads[i].tolist(), inst.sizes)
             # tour_cost is the evaluator's objective (tested to 1e-12); run_solver re-checks it
             out.append(Solution(o, h, objective=float(cost[i]), status="feasible",
                                 stats={"heads": self.heads, "batch": len(instances)}))
