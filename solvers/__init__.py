@@ -60,7 +60,7 @@ BUILTIN: tuple[Builtin, ...] = (
             "local-view policy re-encoded each step (imitation of lns), greedy; -p starts=S rotated views"),
     Builtin("local-search", f"{_L}.search:LocalSearchSolver",
             "local-view policy as a search: multi-start, 2-opt/or-opt, segments re-decoded by the "
-            "policy (0.01 s x K)"),
+            "policy (0.01 s x K)", bench=False),
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),
