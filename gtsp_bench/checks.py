@@ -31,6 +31,16 @@ def is_number(value: object) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
 
 
+#: Relative tolerance under which two objective values are the same value.
+SAME_VALUE_TOL = 1e-9
+
+
+def strictly_better(objective: float, value: float) -> bool:
+    """Whether ``objective`` lies below ``value`` by more than :data:`SAME_VALUE_TOL` (relative,
+    at least that much absolute): the one rule for "a new best known" and "below a reference"."""
+    return objective < value - SAME_VALUE_TOL * max(1.0, abs(value))
+
+
 def default_time_limit(n_clusters: int) -> float:
     """The time limit used when none is given: ``0.5 s * K``, at least 1 s, at most 60 s."""
     return min(MAX_DEFAULT_SECONDS, max(1.0, SECONDS_PER_CLUSTER * n_clusters))

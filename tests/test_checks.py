@@ -23,6 +23,7 @@ from gtsp_bench.checks import (
     default_time_limit,
     parse_ks,
     parse_omegas,
+    strictly_better,
     tour_cost_bound,
 )
 from gtsp_bench.errors import InputError
@@ -253,3 +254,12 @@ def test_check_log_record_checks_the_trajectory():
     assert check_log_record({**failed, "trajectory": []})
     with pytest.raises(InputError, match="a solve without an objective has a trajectory"):
         check_log_record({**failed, "trajectory": [[0.1, 12.5, None]]})
+
+
+def test_strictly_better_needs_more_than_the_tolerance():
+    assert strictly_better(1204.0, 1205.0)
+    assert not strictly_better(1205.0, 1205.0)
+    assert not strictly_better(1205.0 - 1e-7, 1205.0)  # 8e-11 relative: the same value
+    assert not strictly_better(1206.0, 1205.0)
+    assert not strictly_better(-5e-10, 0.0)  # an absolute tolerance near zero
+    assert strictly_better(-2e-9, 0.0)

@@ -368,7 +368,8 @@ def _set_named(name: str, settings: Any) -> Any:
 def _update_references(
     bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any
 ) -> list[Path]:
-    from gtsp_bench.data.sets import read_reference, strictly_better, write_reference
+    from gtsp_bench.checks import strictly_better
+    from gtsp_bench.data.sets import read_reference, write_reference
 
     if bench.name != "references" and not getattr(settings, "update_reference", False):
         return []
@@ -410,9 +411,9 @@ def keep_best_known(df: pd.DataFrame, library: Path, today: str) -> list[tuple[s
     file only, by its SHA-256); returns ``(name, old value, new value, source)`` per kept tour."""
     import hashlib
 
+    from gtsp_bench.checks import strictly_better
     from gtsp_bench.data import gtsplib
     from gtsp_bench.data.io import read_text
-    from gtsp_bench.data.sets import strictly_better
 
     table = gtsplib.parse_best_known((library / "best_known.csv").read_text(encoding="utf-8"))
     ok = df[df["objective"].notna() & df["instance"].isin(list(table)) & (df["order"] != "")]

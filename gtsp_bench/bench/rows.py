@@ -22,6 +22,7 @@ import pandas as pd
 from gtsp_bench.bench.anytime import format_trajectory, metrics, points_of
 from gtsp_bench.bench.definitions import Reference, Run
 from gtsp_bench.bench.sources import Entry
+from gtsp_bench.checks import strictly_better
 
 COLUMNS = (
     "benchmark",
@@ -55,8 +56,6 @@ COLUMNS = (
 REFERENCE_KINDS = ("optimal", "best_known", "best_found")
 #: A gap at most this (percent) is a hit of the reference.
 HIT_GAP_PCT = 1e-6
-#: Relative tolerance under which two objectives are equal.
-REL_TOL = 1e-9
 #: Notes of a row below its reference: an error for a proven optimum, news for a best known.
 BELOW_OPTIMUM = "below the proven optimum"
 BETTER_THAN_BEST_KNOWN = "better than the best known"
@@ -133,7 +132,7 @@ def references(
                 value, c = min(proofs, key=lambda p: p[0])
                 ref = RefValue(value, "optimal", f"{c.run.name} (proven)")
         best = min((v for v, _ in found), default=math.nan)
-        if ref is not None and ref.kind == "best_known" and best < ref.value * (1 - REL_TOL):
+        if ref is not None and ref.kind == "best_known" and strictly_better(best, ref.value):
             ref = RefValue(best, "best_found", f"best of this run, below {ref.source} {ref.value!r}")
         if ref is None and math.isfinite(best):
             ref = RefValue(best, "best_found", "best of this run")
@@ -167,7 +166,7 @@ def make_rows(
             table is not None
             and table.kind == "best_known"
             and math.isfinite(obj)
-            and obj < table.value * (1 - REL_TOL)
+            and strictly_better(obj, table.value)
         ):
             notes.append(BETTER_THAN_BEST_KNOWN)
         bound_gap = (

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
+from gtsp_bench.checks import strictly_better
 from gtsp_bench.data.io import atomic_write_text, read_instance, read_tour, write_tour
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
@@ -237,7 +238,7 @@ def keep_tour(where: Path, name: str, order: Sequence[int], heads: Sequence[int]
     ref = table[name]
     inst = read_instance(where / f"{name}.gtsp.gz")
     length = evaluate(inst, None, order, heads).objective
-    if not length < ref.value - 1e-9 * max(1.0, abs(ref.value)):
+    if not strictly_better(length, ref.value):
         return None
     if ref.proven:
         raise InputError(f"{name}: a tour of length {length!r} lies below the proven optimum "

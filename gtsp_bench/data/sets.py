@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gtsp_bench.bench.tasks import fingerprint
+from gtsp_bench.checks import strictly_better
 from gtsp_bench.data.io import INSTANCE_SUFFIXES, atomic_write_text, format_suffix, instance_stem, read_text
 from gtsp_bench.data.parse import parse_instance_text
 from gtsp_bench.errors import InputError
@@ -51,8 +52,6 @@ STATUSES = ("optimal", "best_known")
 GTSPLIB = "gtsplib"
 #: The committed UAV set of K clusters of 20 nodes (K = 4..10, 20, 50, 100, 200).
 UAV_SET = "uav-K{k}-N20-s1"
-#: Relative tolerance under which two objectives are the same value.
-REL_TOL = 1e-9
 _DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
 
 
@@ -101,7 +100,7 @@ def _row(fields: Sequence[str]) -> ReferenceRow:
             raise InputError(f"omega {omega_t!r} is not in [0, 1]")
     value = _number(value_t, "value")
     lower = _number(lb_t, "lower_bound") if lb_t else None
-    if lower is not None and lower > value + REL_TOL * max(1.0, abs(value)):
+    if lower is not None and strictly_better(value, lower):
         raise InputError(f"lower_bound {lb_t} is above the value {value_t}")
     if status not in STATUSES:
         raise InputError(f"status {status!r} is not one of {', '.join(STATUSES)}")
@@ -330,11 +329,6 @@ class Improvement:
     solver: str
     seed: int
     time_limit: float
-
-
-def strictly_better(objective: float, value: float) -> bool:
-    """Whether ``objective`` is below ``value`` by more than the tolerance."""
-    return objective < value - REL_TOL * max(1.0, abs(value))
 
 
 def apply_improvements(rows: Mapping[tuple[str, float | None], ReferenceRow],
