@@ -10,7 +10,7 @@ a run re-uses every solve of an earlier ``make bench``.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -104,17 +104,9 @@ def run_paper(bench: Benchmark, settings: Any, config: Any, say: Callable[[str],
         {_rel(e.stored.path): e.sha256 for e in entries},
         extra,
     )
-    out = Outcome(
-        tasks=summary.tasks,
-        cached=summary.cached,
-        run=summary.run,
-        failed=summary.failed,
-        refused=summary.refused,
-        records=summary.records,
-        phases=summary.phases,
-        written=[*summary.written, *written],
-        answer=text,
-    )
+    out = Outcome(**{f.name: getattr(summary, f.name) for f in fields(Outcome)})
+    out.written += written
+    out.answer = text
     out.errors += errors_of(df)
     for e in out.errors:
         say(f"error: {e}")

@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from gtsp_bench.bench.pool import PhaseStats
+from gtsp_bench.bench.execute import Outcome, execute
 from gtsp_bench.bench.tasklog import exclusive_lock
 from gtsp_bench.bench.tasks import (
     RunFolder,
@@ -367,20 +367,11 @@ def experiment_rows(config: BenchConfig, experiment: str, sets: Mapping[int, lis
 
 # ---------------------------------------------------------------------- the run
 @dataclass
-class RunSummary:
-    """What :func:`run_bench` did; ``failed`` and ``refused`` count the run's tasks (run or
-    re-used) that ended without a solution, by a failure or by the solver's refusal."""
+class RunSummary(Outcome):
+    """What :func:`run_bench` did: an :class:`~gtsp_bench.bench.execute.Outcome` (``failed``
+    and ``refused`` count the run's tasks, run or re-used, that ended without a solution) plus the
+    instance sets and the task of each key, which the paper benchmark turns into rows."""
 
-    tasks: int = 0
-    cached: int = 0
-    run: int = 0
-    failed: int = 0
-    refused: int = 0
-    phases: list[PhaseStats] = field(default_factory=list)
-    written: list[Path] = field(default_factory=list)
-    wall_s: float = 0.0
-    messages: list[str] = field(default_factory=list)
-    records: dict[str, dict[str, Any]] = field(default_factory=dict)
     sets: dict[int, list[StoredInstance]] = field(default_factory=dict)
     task_map: dict[str, Task] = field(default_factory=dict)
 
@@ -403,10 +394,7 @@ def run_bench(config: BenchConfig, *, log: Callable[[str], None] | None = None) 
 
 
 def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
-    from gtsp_bench.bench.execute import execute
-
     t0 = time.perf_counter()
-    summary = RunSummary()
     refs: dict[str, list[int]] = {}
     for k, r in config.references.items():
         refs.setdefault(r, []).append(k)
@@ -419,9 +407,7 @@ def _run_bench(config: BenchConfig, say: Callable[[str], None]) -> RunSummary:
     order = list(dict.fromkeys([*config.references.values(), *config.solvers]))
     outcome = execute(config, tasks, order, fresh=config.fresh, retry_failed=config.retry_failed,
                       progress=config.progress, say=say)
-    summary.tasks, summary.cached, summary.run = outcome.tasks, outcome.cached, outcome.run
-    summary.failed, summary.refused, summary.phases = outcome.failed, outcome.refused, outcome.phases
-    summary.records, summary.sets, summary.task_map = outcome.records, sets, tasks
+    summary = RunSummary(**vars(outcome), sets=sets, task_map=tasks)
     write_outputs(config, sets, outcome.records, summary, say)
     summary.wall_s = time.perf_counter() - t0
     say(f"done in {summary.wall_s:.1f} s: {summary.run} solves run, {summary.cached} re-used, "
