@@ -1,37 +1,13 @@
-"""What a run writes: the manifest's provenance, the summary, GLNS's table, the doc blocks, the
-sets' reference.csv and GTSPLIB's best-known tours from the rows."""
+"""What a run writes: the manifest's provenance and the summary beside the rows."""
 
 from __future__ import annotations
 
 import hashlib
 import json
-import math
-
-import pandas as pd
 
 from gtsp_bench.bench.definitions import BENCHMARKS
-from gtsp_bench.bench.output_kinds import (
-    DOC_BLOCKS,
-    OUTPUTS,
-    glns_lines,
-    keep_best_known,
-    new_references,
-    pivot_markdown,
-    proof_cell,
-)
 from gtsp_bench.bench.outputs import manifest, write_core
-from gtsp_bench.bench.rows import COLUMNS
-from tests.conftest import REPO
-
-
-def _rows(**over) -> pd.DataFrame:
-    base = {c: "" for c in COLUMNS}
-    base.update(benchmark="b", set="s", instance="i1", K=3, N=4, omega=0.5, solver="lns", label="lns",
-                seed=0, time_limit=1.0, status="feasible", objective=100.0, lower_bound=math.nan,
-                runtime_s=0.5, reference_value=100.0, reference_kind="optimal", gap_pct=0.0,
-                bound_gap_pct=math.nan, primal_integral=0.1, time_to_1pct_s=0.2, time_to_0p1pct_s=0.3)
-    base.update(over)
-    return pd.DataFrame([base], columns=list(COLUMNS))
+from tests.bench.frames import row_frame as _rows
 
 
 def test_the_manifest_names_commit_machine_command_and_instance_hashes(tmp_path):
@@ -49,94 +25,3 @@ def test_the_manifest_names_commit_machine_command_and_instance_hashes(tmp_path)
     assert m["packages"]["numpy"] and m["tasks"] == 1
     assert "| s | lns | 1 | optimal | 0.000 |" in summary
     assert manifest(bench, "", {}, {})["command"].startswith("gtsp-bench")
-
-
-def test_glns_table_puts_lns_beside_glns_and_the_targets():
-    """One line per instance with GLNS's published columns, then the three target lines."""
-    df = pd.concat([_rows(instance="31pr152", seed=s, gap_pct=g) for s, g in ((1, 0.0), (2, 0.5))])
-    lines = glns_lines(df)
-    line = next(x for x in lines if x.startswith("| 31pr152 |"))
-    assert "| 0.2500 | 1/2 | 0.500 |" in line and "/10 |" in line
-    assert "- instances at the best known at least once: 1 of 1" in lines
-
-
-def test_new_references_keep_the_best_tour_its_proof_and_bound():
-    """Per point: the best objective, optimal when some solve proved it, the best bound."""
-    df = pd.concat([_rows(objective=101.0, lower_bound=99.0, label="lns", seed=2),
-                    _rows(objective=100.0, status="optimal", lower_bound=100.0, label="milp", solver="milp")])
-    (row,) = new_references(df, "2026-11-27")["s"]
-    assert (row.instance, row.omega, row.value) == ("i1", 0.5, 100.0)
-    assert (row.status, row.lower_bound) == ("optimal", 100.0)
-    assert row.source == "milp 1s" and row.date == "2026-11-27"
-
-
-def test_doc_tables_are_pivots_of_the_rows():
-    """A line per row value, a column per solver, a cell from the rows of both."""
-    df = pd.concat([_rows(status="optimal"), _rows(label="milp", status="time_limit", bound_gap_pct=0.5)])
-    text = pivot_markdown(df, "set", "label", proof_cell, "set")
-    assert text.splitlines()[0] == "| set | lns | milp |"
-    assert "1/1 proven" in text and "0/1 proven, 0.50s, bound gap <= 0.500%" in text
-
-
-def test_committed_doc_blocks_are_what_their_rows_give():
-    """Each generated doc table is exactly its renderer's output on the committed rows.csv."""
-    from gtsp_bench.bench.output_kinds import run_command
-    from gtsp_bench.bench.rows import read_rows
-
-    for name, (page, block, renderer) in DOC_BLOCKS.items():
-        bench = next(b for b in BENCHMARKS.values() if name in b.outputs)
-        rows = REPO / "results" / bench.name / "rows.csv"
-        if not rows.is_file():
-            continue
-        text = (REPO / page).read_text()
-        want = renderer(bench, read_rows(rows), run_command(rows.parent))
-        assert f"<!-- BEGIN generated:{block} -->\n{want}\n<!-- END generated:{block} -->" in text, name
-
-
-def _gtsplib_rows(tmp_path, value: int) -> tuple[pd.DataFrame, object]:
-    """A copy of the library with 11berlin52 as a best_known row of ``value``, and two rows: GLKH's
-    tour (4040) and a longer one, each of the library's file."""
-    from dataclasses import replace
-
-    from gtsp_bench.data import gtsplib
-    from gtsp_bench.data.io import read_text
-    from tests.conftest import GTSPLIB
-
-    ref = replace(gtsplib.best_known()["11berlin52"], status="best_known", value=value)
-    (tmp_path / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
-    (tmp_path / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
-    sha = hashlib.sha256(read_text(tmp_path / "11berlin52.gtsp.gz").encode()).hexdigest()
-    order, heads = gtsplib.best_tour("11berlin52")
-    text = {"order": " ".join(map(str, order)), "heads": " ".join(map(str, heads))}
-    df = pd.concat([_rows(instance="11berlin52", instance_sha256=sha, objective=4040.0, seed=3, **text),
-                    _rows(instance="11berlin52", instance_sha256=sha, objective=4100.0, seed=4,
-                          order=" ".join(map(str, range(11))), heads=" ".join(["0"] * 11))])
-    return df, gtsplib
-
-
-def test_best_known_keeps_the_shortest_tour_below_the_library_value(tmp_path):
-    """The shortest tour below the row's value is kept with the run's label, budget and seed as
-    its source; rows of another file of the same name, or not below the value, change nothing."""
-    df, gtsplib = _gtsplib_rows(tmp_path, 4100)
-    assert keep_best_known(df.assign(instance_sha256="0" * 64), tmp_path, "2026-11-27") == []
-    assert keep_best_known(df, tmp_path, "2026-11-27") == [
-        ("11berlin52", 4100.0, 4040.0, "gtsp-bench lns 1s seed 3")]
-    row = gtsplib.parse_best_known((tmp_path / "best_known.csv").read_text())["11berlin52"]
-    assert (row.value, row.tour, row.date) == (4040.0, "tours/11berlin52.4040.tour.gz", "2026-11-27")
-    assert keep_best_known(df, tmp_path, "2026-11-28") == []
-
-
-def test_best_known_output_only_for_a_checkouts_results(tmp_path):
-    """The output touches a library only when the run wrote into a checkout's results/NAME (the
-    library beside it); anywhere else it writes nothing."""
-    (tmp_path / "instances" / "gtsplib").mkdir(parents=True)
-    df, _ = _gtsplib_rows(tmp_path / "instances" / "gtsplib", 4100)
-    bench = BENCHMARKS["glns"]
-    said: list[str] = []
-    assert OUTPUTS["best-known"](bench, df, tmp_path / "elsewhere", None, said.append) == []
-    assert not (tmp_path / "instances" / "gtsplib" / "tours").exists()
-    (tmp_path / "mkdocs.yml").write_text("site_name: x\n")
-    written = OUTPUTS["best-known"](bench, df, tmp_path / "results" / "glns", None, said.append)
-    assert written == [tmp_path / "instances" / "gtsplib" / "best_known.csv"]
-    assert said == [f"new best known: 11berlin52: 4100 -> 4040 (gtsp-bench lns 1s seed 3), tour in "
-                    f"{tmp_path / 'instances' / 'gtsplib' / 'tours'}"]

@@ -58,27 +58,8 @@ def test_report_only_redraws_summary_and_doc_table_from_rows(tmp_path, capsys):
     assert len(pd.read_csv(out / "rows.csv")) == 2
 
 
-def test_every_definition_is_runnable_data():
-    """Each definition names registered solvers (optional peers may be absent), outputs the
-    engine knows, quick fields that exist, and a rough time for --list."""
-    from dataclasses import fields
-
-    from gtsp_bench.bench.output_kinds import OUTPUTS
-    from gtsp_bench.registry import solver_names
-
-    names = set(solver_names())
-    valid = {f.name for f in fields(next(iter(BENCHMARKS.values())))}
-    for b in BENCHMARKS.values():
-        assert b.rough_time and b.description and b.sources, b.name
-        assert {r.solver for r in b.runs} <= names, b.name
-        assert set(b.outputs) - {"paper"} <= set(OUTPUTS), b.name
-        assert set(b.quick) <= valid, b.name
-        assert len({r.name for r in b.runs}) == len(b.runs), f"{b.name}: two runs share a label"
-
-
 def test_list_lines_up_its_columns():
     """--list puts every description in the same column, however long a rough time is."""
-    from gtsp_bench.bench.definitions import BENCHMARKS
     from gtsp_bench.cli.bench import list_text
 
     lines = list_text().splitlines()
