@@ -25,7 +25,7 @@ SETS = {k: (30, 1000.0) for k in range(4, 11)} | {20: (20, 1000.0), 50: (20, 150
                                                   100: (20, 2000.0), 200: (20, 3000.0)}
 FIELDS = ["instance", "omega", "value", "lower_bound", "status", "source", "date"]
 LARGE_OMEGAS = {0.3, 0.5, 0.6}
-SOURCE = re.compile(r"(dp|brute|milp \d+(\.\d+)?s|lns \d+(\.\d+)?s seed \d+)$")
+SOURCE = re.compile(r"(dp|brute|[a-z][\w-]*( \d+(\.\d+)?s)?( seed \d+)?)$")
 
 
 def folder(k: int) -> Path:

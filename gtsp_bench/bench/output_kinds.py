@@ -26,6 +26,7 @@ import datetime as dt
 import math
 import statistics
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -320,6 +321,16 @@ def _glns(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say:
 
 
 # ---------------------------------------------------------------------- reference.csv
+def _source(row: pd.Series) -> str:
+    """Who found a reference tour: the run's label, its time limit (when it had one), its seed."""
+    limit, seed = row["time_limit"], row["seed"]
+    return (
+        str(row["label"])
+        + (f" {float(limit):g}s" if pd.notna(limit) else "")
+        + (f" seed {int(seed)}" if pd.notna(seed) else "")
+    )
+
+
 def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
     """Per set folder, the reference rows the run's best tours give: the best objective of each
     (instance, omega), ``optimal`` when a solve proved it, its best lower bound."""
@@ -332,9 +343,7 @@ def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
         best = g.iloc[int(g["objective"].to_numpy().argmin())]
         proven = bool((g["status"] == "optimal").any())
         lower = g["lower_bound"].max()
-        source = f"{best['label']} {best['time_limit']:g}s" + (
-            f" seed {int(best['seed'])}" if best["label"] == "lns" else ""
-        )
+        source = _source(best)
         out.setdefault(s, []).append(
             ReferenceRow(
                 inst,
@@ -365,18 +374,41 @@ def _set_named(name: str, settings: Any) -> Any:
     return None
 
 
+def _repriced(found: Any, row: Any, df: pd.DataFrame) -> Any:
+    """``row`` valued at the exact cost of the run's best tour for its point, re-priced from the
+    set's instance file (rows.csv keeps 10 digits); as it is when the rows hold no tour."""
+    from gtsp_bench.data.io import read_instance
+    from gtsp_bench.energy import evaluate
+
+    g = df[(df["set"] == found.name) & (df["instance"] == row.instance) & df["objective"].notna()]
+    g = g[g["omega"].isna()] if row.omega is None else g[g["omega"].astype(float) == row.omega]
+    path = next((f.path for f in found.files if f.stem == row.instance), None)
+    if path is None or g.empty:
+        return row
+    best = g.loc[g["objective"].astype(float).idxmin()]
+    if pd.isna(best["order"]) or not str(best["order"]).strip():
+        return row
+    order, heads = (list(map(int, str(best[c]).split())) for c in ("order", "heads"))
+    return replace(row, value=evaluate(read_instance(path), row.omega, order, heads).objective)
+
+
 def _update_references(
     bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any
 ) -> list[Path]:
     from gtsp_bench.checks import strictly_better
+    from gtsp_bench.data import gtsplib
     from gtsp_bench.data.sets import read_reference, write_reference
 
     if bench.name != "references" and not getattr(settings, "update_reference", False):
         return []
     today = dt.date.today().isoformat()
+    library = set(gtsplib.names())
+    settled = {s for s, g in df.groupby("set") if (g["reference_kind"] == "optimal").all()}
     written = []
     for set_name, rows in new_references(df, today).items():
         s = _set_named(set_name, settings)
+        if s is None and ({r.instance for r in rows} <= library or set_name in settled):
+            continue  # a group of GTSPLIB files, or a generated set measured against proven optima
         if s is None:
             say(f"warning: {set_name}: no such set folder; its reference.csv was not updated")
             continue
@@ -385,11 +417,13 @@ def _update_references(
         have = read_reference(s.reference_path)
         merged = dict(have)
         changed = []
-        for r in rows:
+        for r in (_repriced(s, row, df) for row in rows):
             old = have.get((r.instance, r.omega))
             if old is None or (
                 old.status != "optimal" and (strictly_better(r.value, old.value) or r.status == "optimal")
             ):
+                if old is not None and old.lower_bound is not None:  # a bound holds whatever the tour
+                    r = replace(r, lower_bound=max(old.lower_bound, r.lower_bound or old.lower_bound))
                 merged[(r.instance, r.omega)] = r
                 changed.append(
                     f"{r.instance} omega {r.omega}: {None if old is None else old.value!r} -> {r.value!r}"

@@ -380,5 +380,5 @@ def test_update_reference_writes_a_better_tour_into_the_sets_reference_csv(tmp_p
     refs = read_reference(folder / "reference.csv")
     rows = pd.read_csv(tmp_path / "out" / "rows.csv").set_index("instance")
     assert refs[("mine-0", 0.5)].value == pytest.approx(rows.loc["mine-0", "objective"], rel=1e-9)
-    assert refs[("mine-0", 0.5)].source == "greedy 10s" and refs[("mine-0", 0.5)].status == "best_known"
+    assert (refs[("mine-0", 0.5)].source, refs[("mine-0", 0.5)].status) == ("greedy 10s seed 0", "best_known")
     assert refs[("mine-1", 0.5)].value == pytest.approx(rows.loc["mine-1", "objective"], rel=1e-9)

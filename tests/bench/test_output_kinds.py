@@ -4,6 +4,7 @@ and GTSPLIB's best-known tours, each from the rows."""
 from __future__ import annotations
 
 import hashlib
+import math
 
 import pandas as pd
 
@@ -37,7 +38,39 @@ def test_new_references_keep_the_best_tour_its_proof_and_bound():
     (row,) = new_references(df, "2026-11-27")["s"]
     assert (row.instance, row.omega, row.value) == ("i1", 0.5, 100.0)
     assert (row.status, row.lower_bound) == ("optimal", 100.0)
-    assert row.source == "milp 1s" and row.date == "2026-11-27"
+    assert row.source == "milp 1s seed 0" and row.date == "2026-11-27"
+
+
+def test_a_better_tour_keeps_the_rows_lower_bound_and_names_its_run(tmp_path):
+    """--update-reference on a run without a time limit (a learned policy): the exact cost of its
+    tour (rows.csv rounds it), the old row's lower bound (it holds whatever the tour), a source
+    without a time; a group of GTSPLIB files (no set folder of that name) is passed over without
+    a warning."""
+    from types import SimpleNamespace
+
+    from gtsp_bench.data.io import write_instance
+    from gtsp_bench.data.sets import read_reference
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.registry import get_solver, run_solver
+
+    folder = tmp_path / "mine"
+    inst = generate_instance(3, 4, seed=0, name="i1")
+    write_instance(inst, folder / "i1.json")
+    r = run_solver(get_solver("greedy"), inst, 0.5)
+    (folder / "reference.csv").write_text(
+        "instance,omega,value,lower_bound,status,source,date\n"
+        f"i1,0.5,{r.objective + 10},1.0,best_known,lns 10s seed 1,2026-01-01\n")
+    tour = {"order": " ".join(map(str, r.order)), "heads": " ".join(map(str, r.heads))}
+    df = pd.concat([_rows(set="mine", objective=round(r.objective, 1), time_limit=math.nan,
+                          label="local-search", seed=3, **tour),
+                    _rows(set="GTSPLIB <= 200 nodes", instance="11berlin52", objective=1.0)])
+    said: list[str] = []
+    settings = SimpleNamespace(update_reference=True, sets=(str(folder),), instance_dir=str(tmp_path))
+    written = OUTPUTS["update-references"](BENCHMARKS["sets"], df, tmp_path, settings, said.append)
+    assert written == [folder / "reference.csv"]
+    row = read_reference(folder / "reference.csv")[("i1", 0.5)]
+    assert (row.value, row.lower_bound, row.source) == (r.objective, 1.0, "local-search seed 3")  # re-priced
+    assert not [m for m in said if m.startswith("warning")], said
 
 
 def test_doc_tables_are_pivots_of_the_rows():
