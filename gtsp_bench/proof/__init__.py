@@ -13,10 +13,15 @@ Modules, each importing only the ones above it:
 
 * :mod:`~gtsp_bench.proof.format`: the versioned JSON layout, reading and writing (gzip), the
   instance fingerprint, variables;
+* :mod:`~gtsp_bench.proof.encode`: version 2's dense layout of cuts and proofs, and the
+  conversions between the versions;
 * :mod:`~gtsp_bench.proof.families`: the cut families, their validity and coefficients;
 * :mod:`~gtsp_bench.proof.bounds`: the exact Lagrangian and Farkas bounds of a dual vector over a
   domain of fixed variables;
-* :mod:`~gtsp_bench.proof.check`: the tree walk and :func:`check_certificate`.
+* :mod:`~gtsp_bench.proof.check`: the tree walk (:class:`~gtsp_bench.proof.check.ProofChecker`)
+  and :func:`check_certificate`;
+* :mod:`~gtsp_bench.proof.trim` and :mod:`~gtsp_bench.proof.compact`: shorter certificates
+  (fewer root fixings; each proof on the coarsest scale that still checks), for the writer.
 
 The package imports nothing from the solvers: a certificate is checked without the code that
 wrote it.

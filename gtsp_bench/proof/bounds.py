@@ -9,7 +9,7 @@ bound. A Farkas proof is the same with ``c = 0``: a positive value shows that no
 domain.
 
 Duals are integers scaled by ``2**bits``; the scaled ``A'w`` of every column is computed in int64
-(products of 0/1 matrices with duals split into 26-bit halves, exact in float64) and the costs are
+(each subtour row's dual summed over its node pairs in 26-bit halves, exact in float64) and the costs are
 compared and summed exactly (scaled integers for integer costs, fractions otherwise).
 """
 
@@ -130,13 +130,21 @@ def _sparse(entries: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]
     return np.array(idx, dtype=np.int64), np.array(val, dtype=np.int64)
 
 
-def _split_product(mask: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``mask.T @ diag(weights) @ mask`` exactly (``mask``: (k, n) 0/1, ``weights``: int64)."""
+def _split_product(rows: list[Gsec], weights: np.ndarray) -> np.ndarray:
+    """``M.T @ diag(weights) @ M`` exactly, ``M`` the 0/1 member masks of ``rows`` (int64
+    ``weights``): each row's weight summed over its node pairs (no matrix product, whose threads
+    contend on a busy machine), in float64 halves of 26 bits that sum exactly."""
+    n = len(rows[0].members)
+    pairs = [r.pairs for r in rows]
+    flat = np.concatenate(pairs)
+    reps = np.array([len(p) for p in pairs])
     hi = weights >> _SPLIT
     lo = weights - (hi << _SPLIT)
-    m = mask.astype(np.float64)
-    out = np.rint((m.T * hi.astype(np.float64)) @ m).astype(np.int64) << _SPLIT
-    return out + np.rint((m.T * lo.astype(np.float64)) @ m).astype(np.int64)
+    out = np.zeros(n * n, np.int64)
+    for part, shift in ((hi, _SPLIT), (lo, 0)):
+        sums = np.bincount(flat, np.repeat(part.astype(np.float64), reps), minlength=n * n)
+        out += np.rint(sums).astype(np.int64) << shift
+    return out.reshape(n, n)
 
 
 @dataclass(frozen=True)
@@ -240,8 +248,7 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
     if g_idx:
         rows = [cuts[ki[k]] for k in g_idx]
         lam = kv[g_idx]
-        members = np.array([c.members for c in rows])
-        aw_x = aw_x + _split_product(members, lam)
+        aw_x = aw_x + _split_product(rows, lam)
         for c, w in zip(rows, lam, strict=True):
             aw_y = aw_y + int(w) * c.y_coef(space.cluster_of)
     pair = np.zeros((m, m), np.int64)

@@ -22,8 +22,9 @@ from gtsp_bench.errors import InfeasibleSolutionError, InputError
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 from gtsp_bench.proof.bounds import Domain, Priced, Space, price_duals
+from gtsp_bench.proof.encode import decode_cut, decode_proofs
 from gtsp_bench.proof.families import Cut, parse_cut
-from gtsp_bench.proof.format import fingerprint, parse_var, var_name
+from gtsp_bench.proof.format import READABLE, fingerprint, parse_var, var_name
 
 #: Proofs whose reduced costs are kept between uses (a parent's proof closes its children).
 _CACHE = 4
@@ -90,22 +91,49 @@ def _field(cert: dict[str, Any], key: str, kind: type | tuple[type, ...]) -> Any
     return value
 
 
-class _Checker:
-    """State of one check: the space, the parsed cuts, the proofs and a small cache."""
+class ProofChecker:
+    """The steps of a check that a tree walk takes: each proof's reduced costs (a few kept in a
+    cache: a parent's proof often closes its children), closing a node, applying a fixing.
+
+    Parameters
+    ----------
+    space
+        The model's columns and costs.
+    cuts
+        The certificate's cuts, parsed (:func:`~gtsp_bench.proof.families.parse_cut`).
+    proofs
+        The proofs in version 1's layout.
+    bits
+        The dual scale: every dual is an integer over ``2**bits``.
+    cutoff
+        Every tour must be shown to cost more than this.
+    uses
+        When given, each proof's uses are recorded in it: ``uses[k]`` lists ``("close", domain)``
+        for a domain the proof must bound above the cutoff and ``("rule", domain, ys, xs)`` for a
+        reduced-cost fixing (the domain before it, the columns it fixed).
+
+    A proof (version 1's layout) may carry its own scale as ``"bits"``, else ``bits`` applies.
+    """
 
     def __init__(self, space: Space, cuts: list[Cut], proofs: list[Any], bits: int,
-                 cutoff: Fraction) -> None:
+                 cutoff: Fraction, uses: dict[int, list[tuple[Any, ...]]] | None = None) -> None:
         self.space, self.cuts, self.proofs, self.bits, self.cutoff = space, cuts, proofs, bits, cutoff
         self.cache: OrderedDict[int, Priced] = OrderedDict()
+        self.uses = uses
 
     def priced(self, k: Any, where: str) -> Priced:
+        """The reduced costs of proof ``k`` (``where`` names the step for an error)."""
         if not is_int(k) or not 0 <= k < len(self.proofs):
             raise ProofError(f"{where}: proof {k!r} does not exist")
         if k in self.cache:
             self.cache.move_to_end(k)
             return self.cache[k]
+        proof = self.proofs[k]
+        bits = proof.get("bits", self.bits) if isinstance(proof, dict) else self.bits
+        if not is_int(bits) or not 0 <= bits <= 60:
+            raise ProofError(f"{where}: proof {k}: its scale 'bits' must be an integer in [0, 60]")
         try:
-            p = price_duals(self.space, self.cuts, self.proofs[k], self.bits)
+            p = price_duals(self.space, self.cuts, proof, bits)
         except ValueError as e:
             raise ProofError(f"{where}: proof {k}: {e}") from None
         self.cache[k] = p
@@ -116,6 +144,8 @@ class _Checker:
     def closes(self, k: Any, domain: Domain, where: str) -> None:
         """Check that proof ``k`` bounds ``domain`` above the cutoff (or shows it empty)."""
         p = self.priced(k, where)
+        if self.uses is not None:
+            self.uses.setdefault(k, []).append(("close", domain.copy()))
         b = p.bound(domain)
         if p.farkas and b <= 0:
             raise ProofError(f"{where}: Farkas proof {k} has value {float(b):.6g}, not above 0 "
@@ -125,6 +155,7 @@ class _Checker:
                              f"cutoff {float(self.cutoff):.10g}")
 
     def var(self, v: Any, where: str) -> tuple[int, int]:
+        """``(i, j)`` of a variable of the certificate (:func:`~gtsp_bench.proof.format.parse_var`)."""
         try:
             return parse_var(v, self.space.n_nodes, self.space.cluster_of)
         except ValueError as e:
@@ -143,6 +174,8 @@ class _Checker:
                 raise ProofError(f"{where}: reduced-cost fixing needs a dual proof, not Farkas")
             room = self.cutoff - p.bound(domain)
             ys, (xi, xj) = p.fixable(domain, room)
+            if self.uses is not None:
+                self.uses.setdefault(k, []).append(("rule", domain.copy(), ys, (xi, xj)))
             domain.y[ys] = 0
             domain.x[xi, xj] = 0
             return False
@@ -183,7 +216,8 @@ def _tree(nodes: Any) -> dict[int, list[int]]:
     return children
 
 
-def check_certificate(instance: Instance, cert: dict[str, Any]) -> CheckResult:
+def check_certificate(instance: Instance, cert: dict[str, Any],
+                      uses: dict[int, list[tuple[Any, ...]]] | None = None) -> CheckResult:
     """Check a certificate against an instance.
 
     Parameters
@@ -192,6 +226,8 @@ def check_certificate(instance: Instance, cert: dict[str, Any]) -> CheckResult:
         The instance (its file as read by :func:`gtsp_bench.data.io.read_instance`).
     cert
         The certificate (:func:`gtsp_bench.proof.format.read_certificate`).
+    uses
+        When given, what each proof is used for is recorded in it (see :class:`ProofChecker`).
 
     Returns
     -------
@@ -228,15 +264,25 @@ def check_certificate(instance: Instance, cert: dict[str, Any]) -> CheckResult:
     bits = _field(cert, "dual_bits", int)
     if not 0 <= bits <= 60:
         raise InputError("certificate field 'dual_bits' must be in [0, 60]")
+    version = cert.get("version", 1)
+    if version not in READABLE:
+        raise InputError(f"certificate version {version!r}; this checker reads versions "
+                         f"{', '.join(map(str, READABLE))}")
     cuts = []
     for k, c in enumerate(_field(cert, "cuts", list)):
         try:
-            cuts.append(parse_cut(c, space.cluster_of))
+            cuts.append(parse_cut(decode_cut(c) if version == 2 else c, space.cluster_of))
         except ValueError as e:
             raise ProofError(f"cut {k}: {e}") from None
+    proofs = _field(cert, "proofs", list)
+    if version == 2:
+        try:
+            proofs = decode_proofs(proofs, problem.n_clusters, problem.n_nodes, bits)
+        except ValueError as e:
+            raise ProofError(str(e)) from None
     nodes = cert.get("nodes")
     children = _tree(nodes)
-    checker = _Checker(space, cuts, _field(cert, "proofs", list), bits, cutoff)
+    checker = ProofChecker(space, cuts, proofs, bits, cutoff, uses)
     stack: list[tuple[int, Domain | None]] = [(0, Domain.free(space))]
     seen = leaves = 0
     while stack:

@@ -21,6 +21,7 @@ Both are ``<=`` rows: their duals in a proof must be at most 0.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,6 +48,12 @@ class Gsec:
     members: np.ndarray
     c1: int
     c2: int
+
+    @functools.cached_property
+    def pairs(self) -> np.ndarray:
+        """Flat indices ``i * n + j`` of every ordered pair of members (``i == j`` included)."""
+        q = np.flatnonzero(self.members)
+        return (q[:, None] * len(self.members) + q[None, :]).ravel()
 
     def y_coef(self, cluster_of: np.ndarray) -> np.ndarray:
         """Coefficients of the ``y`` columns on the left-hand side (``-1`` on ``Q - C1``, ``-1``

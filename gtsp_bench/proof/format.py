@@ -1,6 +1,8 @@
 """The certificate file: a versioned JSON object, gzip-compressed (``.cert.json.gz``).
 
-Layout of version :data:`VERSION` (docs/proofs.md documents it for outsiders):
+Layout of version 1 (docs/proofs.md documents both versions for outsiders; version 2, which
+:data:`VERSION` names and the solver writes, holds the same fields with cuts and proofs written
+more densely, :mod:`gtsp_bench.proof.encode`, and the checker reads both):
 
 * ``format`` (:data:`FORMAT`), ``version``;
 * ``instance``: ``name``, ``nodes``, ``clusters`` and ``costs_sha256`` (:func:`fingerprint`), and
@@ -42,8 +44,10 @@ from gtsp_bench.problem import Problem
 
 #: The ``format`` field of every certificate.
 FORMAT = "gtsp-bench proof certificate"
-#: The version this package writes and checks.
-VERSION = 1
+#: The version this package writes.
+VERSION = 2
+#: The versions the checker reads (version 1: every dual sparse, sets as plain lists).
+READABLE = (1, 2)
 #: Suffix of a certificate file.
 SUFFIX = ".cert.json.gz"
 
@@ -96,9 +100,9 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(f"{path}: not a certificate (not gzip-compressed JSON: {e})") from None
     if not isinstance(cert, dict) or cert.get("format") != FORMAT:
         raise InputError(f"{path}: not a certificate (no 'format': {FORMAT!r})")
-    if cert.get("version") != VERSION:
+    if cert.get("version") not in READABLE:
         raise InputError(f"{path}: certificate version {cert.get('version')!r}; this checker reads "
-                         f"version {VERSION}")
+                         f"versions {', '.join(map(str, READABLE))}")
     return cert
 
 

@@ -19,7 +19,8 @@ import numpy as np
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
 from gtsp_bench.proof.bounds import Domain, Space
-from gtsp_bench.proof.check import ProofError, _Checker, check_certificate
+from gtsp_bench.proof.check import ProofChecker, ProofError, check_certificate
+from gtsp_bench.proof.encode import to_version1, to_version2
 from gtsp_bench.proof.families import parse_cut
 
 #: A free column counts as mattering to a proof when its reduced cost there is below this share
@@ -58,13 +59,19 @@ def trim_certificate(instance: Instance, cert: dict[str, Any]) -> dict[str, Any]
     instance
         The instance.
     cert
-        A certificate that :func:`~gtsp_bench.proof.check.check_certificate` accepts.
+        A certificate (version 1 or 2) that :func:`~gtsp_bench.proof.check.check_certificate`
+        accepts.
 
     Returns
     -------
     dict
-        The trimmed certificate (checked), or ``cert`` when nothing could be dropped safely.
+        The trimmed certificate (checked; in ``cert``'s version), or ``cert`` when nothing could
+        be dropped safely.
     """
+    if cert.get("version") == 2:
+        v1 = to_version1(cert)
+        out = trim_certificate(instance, v1)
+        return cert if out is v1 else to_version2(out)
     root = cert["nodes"][0]
     fixes = root.get("fix", [])
     rules = [i for i, f in enumerate(fixes) if f.get("rule") == "reduced_cost"]
@@ -73,7 +80,7 @@ def trim_certificate(instance: Instance, cert: dict[str, Any]) -> dict[str, Any]
     problem = price(instance, cert["instance"].get("omega"))
     space = Space.of(problem)
     cuts = [parse_cut(c, space.cluster_of) for c in cert["cuts"]]
-    checker = _Checker(space, cuts, cert["proofs"], cert["dual_bits"], Fraction(cert["cutoff"]))
+    checker = ProofChecker(space, cuts, cert["proofs"], cert["dual_bits"], Fraction(cert["cutoff"]))
     domain = Domain.free(space)
     fixed: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # per rule: fixed y mask, fixed x mask
     for i, f in enumerate(fixes):

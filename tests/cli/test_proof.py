@@ -50,3 +50,16 @@ def test_bad_input_is_one_line(cert: Path, tmp_path: Path, capsys: pytest.Captur
     assert "not a certificate" in capsys.readouterr().err
     assert main(["solve", BERLIN, "-s", "lns", "--certificate", str(tmp_path / "x")]) == 2
     assert "has no option 'certificate'" in capsys.readouterr().err
+
+
+def test_both_versions_check(cert: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The solver writes version 2; the same proof in version 1's layout checks too."""
+    from gtsp_bench.proof.encode import to_version1
+    from gtsp_bench.proof.format import read_certificate, write_certificate
+
+    v2 = read_certificate(cert)
+    assert v2["version"] == 2
+    write_certificate(tmp_path / "v1.cert.json.gz", to_version1(v2))
+    capsys.readouterr()
+    assert main(["check-proof", BERLIN, str(tmp_path / "v1.cert.json.gz")]) == 0
+    assert capsys.readouterr().out == "proven optimal: 4040\n"

@@ -102,3 +102,18 @@ def test_bad_duals_are_refused() -> None:
         price_duals(space, cut, {"kind": "dual", "degree": [[99, 1]]}, BITS)
     with pytest.raises(ValueError, match="too large"):
         price_duals(space, cut, {"kind": "dual", "degree": [[0, 2**61]]}, BITS)
+
+
+def test_the_pair_sums_of_subtour_rows_are_exact() -> None:
+    """Each gsec row's dual summed over its node pairs equals the exact product M'diag(w)M, also
+    for duals near the largest allowed (no float rounding in the halves)."""
+    from gtsp_bench.proof.bounds import _split_product
+
+    rng = np.random.default_rng(3)
+    n = 40
+    rows = [Gsec(rng.random(n) < p, 0, 1) for p in rng.random(60)]
+    rows = [r for r in rows if r.members.any()]
+    w = -rng.integers(0, 2**58 // len(rows), len(rows))
+    mask = np.array([r.members for r in rows]).astype(object)
+    exact = (mask.T * w.astype(object)) @ mask
+    assert (_split_product(rows, w).astype(object) == exact).all()

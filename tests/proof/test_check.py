@@ -7,36 +7,48 @@ from typing import Any
 
 import pytest
 from gtsp_bench.solvers.exact.milp import Milp
+from gtsp_bench.solvers.exact.mip import certify
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.proof import ProofError, check_certificate
+from gtsp_bench.proof.encode import encode_proofs, to_version1, to_version2
 from gtsp_bench.proof.format import read_certificate
 from gtsp_bench.registry import run_solver
 from tests.conftest import GTSPLIB
 
 
-def _certify(instance: Instance, omega: float | None, path: Any, **options: Any) -> dict:
-    sol = Milp(certificate=str(path), **options).solve(instance, omega, time_limit=120)
+def _certify(instance: Instance, omega: float | None, path: Any, version: int = 2,
+             **options: Any) -> dict:
+    """A certificate of the milp solve, in the layout ``version`` (1: as the writer made them
+    before version 2, every dual on the scale 2**-32)."""
+    with pytest.MonkeyPatch.context() as mp:
+        if version == 1:
+            mp.setattr(certify, "compact_certificate", lambda instance, cert, trim: cert)
+        sol = Milp(certificate=str(path), **options).solve(instance, omega, time_limit=120)
     assert sol.status == "optimal" and sol.stats["certificate_bytes"] > 0
-    return read_certificate(path)
+    cert = read_certificate(path)
+    assert cert["version"] == version
+    return cert
 
 
-@pytest.fixture(scope="module")
-def berlin(tmp_path_factory: pytest.TempPathFactory) -> tuple[Instance, dict]:
-    """11berlin52: proven at the root (a leaf, reduced-cost fixings)."""
+@pytest.fixture(scope="module", params=[1, 2])
+def berlin(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+           ) -> tuple[Instance, dict]:
+    """11berlin52: proven at the root (a leaf, reduced-cost fixings), in each version."""
     inst = read_instance(GTSPLIB / "11berlin52.gtsp.gz")
-    return inst, _certify(inst, None, tmp_path_factory.mktemp("c") / "b.cert.json.gz")
+    return inst, _certify(inst, None, tmp_path_factory.mktemp("c") / "b.cert.json.gz", request.param)
 
 
-@pytest.fixture(scope="module")
-def branched(tmp_path_factory: pytest.TempPathFactory) -> tuple[Instance, dict]:
+@pytest.fixture(scope="module", params=[1, 2])
+def branched(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+             ) -> tuple[Instance, dict]:
     """A UAV instance (float costs) whose proof branches (a short root, the greedy tour)."""
     inst = generate_instance(16, 6, seed=8)
-    cert = _certify(inst, 0.5, tmp_path_factory.mktemp("c") / "u.cert.json.gz", root_rounds=1,
-                    lns_trials=0)
+    cert = _certify(inst, 0.5, tmp_path_factory.mktemp("c") / "u.cert.json.gz", request.param,
+                    root_rounds=1, lns_trials=0)
     assert len(cert["nodes"]) >= 3
     return inst, cert
 
@@ -67,7 +79,11 @@ def test_a_changed_dual_no_longer_closes(berlin: tuple[Instance, dict]) -> None:
     inst, cert = berlin
     bad = copy.deepcopy(cert)
     leaf = bad["nodes"][0]["proof"]
-    bad["proofs"][leaf]["cluster"] = bad["proofs"][leaf]["cluster"][1:]  # one cluster dual zeroed
+    if cert["version"] == 1:
+        bad["proofs"][leaf]["cluster"] = bad["proofs"][leaf]["cluster"][1:]  # one cluster dual zeroed
+    else:  # one cluster dual lowered by 1,000
+        bits = bad["proofs"][leaf].get("bits", bad["dual_bits"])
+        bad["proofs"][leaf]["cluster"][0] -= 1000 << bits
     _refused(inst, bad, f"node 0 \\(leaf\\): proof {leaf} bounds it at .* not above the cutoff 4039")
 
 
@@ -85,12 +101,20 @@ def test_a_removed_leaf_leaves_the_space_uncovered(branched: tuple[Instance, dic
 
 def test_an_invalid_cut_is_refused(berlin: tuple[Instance, dict]) -> None:
     inst, cert = berlin
+    v1 = cert["version"] == 1
     bad = copy.deepcopy(cert)
-    k = next(i for i, c in enumerate(bad["cuts"]) if c["family"] == "gsec")
-    bad["cuts"][k]["C2"] = bad["cuts"][k]["C1"]  # x(E(Q)) <= y(Q): no longer a subtour cut
+    k = next(i for i, c in enumerate(bad["cuts"]) if (c["family"] if v1 else c[0]) == "gsec")
+    if v1:  # x(E(Q)) <= y(Q): no longer a subtour cut
+        bad["cuts"][k]["C2"] = bad["cuts"][k]["C1"]
+    else:
+        bad["cuts"][k][2] = bad["cuts"][k][1]
     _refused(inst, bad, f"cut {k}: C1 and C2 are the same cluster")
     bad = copy.deepcopy(cert)
-    bad["cuts"][k]["Q"] = list(range(inst.n_nodes))
+    every = list(range(inst.n_nodes))
+    if v1:
+        bad["cuts"][k]["Q"] = every
+    else:
+        bad["cuts"][k][3] = [0] + [1] * (inst.n_nodes - 1)
     _refused(inst, bad, f"cut {k}: Q holds every node")
 
 
@@ -98,8 +122,25 @@ def test_a_positive_cut_dual_is_refused(berlin: tuple[Instance, dict]) -> None:
     inst, cert = berlin
     bad = copy.deepcopy(cert)
     leaf = bad["nodes"][0]["proof"]
-    bad["proofs"][leaf]["cuts"][0][1] = abs(bad["proofs"][leaf]["cuts"][0][1]) + 1
+    if cert["version"] == 1:
+        bad["proofs"][leaf]["cuts"][0][1] = abs(bad["proofs"][leaf]["cuts"][0][1]) + 1
+    else:  # the leaf's proof written whole (no base), with its first cut dual made positive
+        proof = to_version1(cert)["proofs"][leaf]
+        proof["cuts"][0][1] = abs(proof["cuts"][0][1]) + 1
+        bad["proofs"][leaf] = encode_proofs([proof], inst.n_clusters, inst.n_nodes, cert["dual_bits"])[0]
     _refused(inst, bad, "is positive")
+
+
+def test_a_malformed_version_2_proof_is_named(berlin: tuple[Instance, dict]) -> None:
+    """A version 2 proof whose lists do not fit the instance, or whose base is not earlier, is
+    refused naming the proof."""
+    inst, cert = berlin
+    bad = copy.deepcopy(to_version2(cert))  # (version 1 converted, the same duals)
+    bad["proofs"][0]["degree"] = bad["proofs"][0]["degree"][1:]
+    _refused(inst, bad, f"proof 0: 'degree' must be a list of {inst.n_nodes} integers")
+    bad = copy.deepcopy(to_version2(cert))
+    bad["proofs"][0]["base"] = 0
+    _refused(inst, bad, "proof 0: base 0 is not an earlier proof")
 
 
 def test_a_tour_priced_wrong_is_refused(berlin: tuple[Instance, dict]) -> None:

@@ -113,3 +113,10 @@ def test_blossom_rhs_and_a_violated_even_blossom() -> None:
 def test_bad_sets_are_refused_with_the_reason(cut: dict, reason: str) -> None:
     with pytest.raises(ValueError, match=reason):
         parse_cut(cut, tiny(0).cluster_of)
+
+
+def test_gsec_pairs_are_every_ordered_pair_of_members() -> None:
+    """``Gsec.pairs`` lists ``i * n + j`` for every ordered pair of members, ``i == j`` too."""
+    members = np.zeros(5, dtype=bool)
+    members[[1, 3]] = True
+    assert sorted(Gsec(members, 0, 1).pairs.tolist()) == [6, 8, 16, 18]

@@ -14,6 +14,7 @@ from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import price
 from gtsp_bench.proof.format import (
     FORMAT,
+    READABLE,
     VERSION,
     fingerprint,
     parse_var,
@@ -28,6 +29,10 @@ def test_round_trip(tmp_path: Path) -> None:
     size = write_certificate(tmp_path / "a.cert.json.gz", cert)
     assert size == (tmp_path / "a.cert.json.gz").stat().st_size
     assert read_certificate(tmp_path / "a.cert.json.gz") == cert
+    assert VERSION == 2 and READABLE == (1, 2)
+    old = dict(cert, version=1)  # the first version is still read
+    write_certificate(tmp_path / "v1.cert.json.gz", old)
+    assert read_certificate(tmp_path / "v1.cert.json.gz") == old
     (tmp_path / "b.json").write_text(json.dumps(cert))  # plain JSON is read too
     assert read_certificate(tmp_path / "b.json") == cert
 
@@ -36,7 +41,8 @@ def test_round_trip(tmp_path: Path) -> None:
     (b"\x1f\x8b broken", "not a certificate \\(not gzip-compressed JSON"),
     (b"{nope", "not a certificate \\(not gzip-compressed JSON"),
     (json.dumps({"format": "other"}).encode(), "no 'format'"),
-    (gzip.compress(json.dumps({"format": FORMAT, "version": 99}).encode()), "version 99"),
+    (gzip.compress(json.dumps({"format": FORMAT, "version": 99}).encode()),
+     "version 99; this checker reads versions 1, 2"),
 ])
 def test_bad_files_are_refused(tmp_path: Path, data: bytes, reason: str) -> None:
     path = tmp_path / "x.cert.json.gz"

@@ -25,7 +25,8 @@ from gtsp_bench.solvers.exact.mip.model import GtspModel
 from gtsp_bench.solvers.exact.mip.separation import Cuts
 
 from gtsp_bench.proof.check import ProofError, check_certificate
-from gtsp_bench.proof.format import FORMAT, VERSION, instance_header
+from gtsp_bench.proof.compact import compact_certificate
+from gtsp_bench.proof.format import FORMAT, instance_header
 
 #: Duals are written as integers over ``2**DUAL_BITS``.
 DUAL_BITS = 32
@@ -192,10 +193,10 @@ class ProofLog:
             cert = self._write(problem, tour, value, cutoff)
             try:  # fewer fixings are a shorter proof only if it still holds
                 check_certificate(problem.instance, cert)
-                return cert
+                return compact_certificate(problem.instance, cert, trim=False)
             except ProofError:
                 self.nodes[0].fix = full
-        return self._write(problem, tour, value, cutoff)
+        return compact_certificate(problem.instance, self._write(problem, tour, value, cutoff), trim=False)
 
     def _needed_fixings(self, chained: bool) -> list[dict[str, Any]]:
         """The root fixings that fixed a column whose reduced cost is not clearly positive at a
@@ -257,7 +258,7 @@ class ProofLog:
                 out["proof"] = renumber[nd.proof]
             nodes_out.append(out)
         head = instance_header(problem)
-        return {"format": FORMAT, "version": VERSION, "instance": head,
+        return {"format": FORMAT, "version": 1, "instance": head,
                 "tour": [int(v) for v in tour], "value": float(value), "cutoff": float(cutoff),
                 "dual_bits": DUAL_BITS, "cuts": cuts_out, "proofs": proofs_out, "nodes": nodes_out}
 

@@ -90,12 +90,13 @@ def solve_exact(
     Raises
     ------
     InputError
-        A certificate asked of a backend with its own MILP, or of at most 3 clusters (solved
-        without the model).
+        A certificate asked of a backend with its own MILP, or of fewer than 3 clusters (solved
+        without the model; 3 clusters are enumerated too, but searched with the model when a
+        certificate is asked for).
     """
     check_symmetric(problem)
-    if certificate is not None and problem.n_clusters <= 3:
-        raise InputError(f"{problem.instance.name}: a certificate needs at least 4 clusters "
+    if certificate is not None and problem.n_clusters < 3:
+        raise InputError(f"{problem.instance.name}: a certificate needs at least 3 clusters "
                          f"(this instance has {problem.n_clusters}; its optimum is enumerated)")
     start = time.perf_counter()
     deadline = math.inf if time_limit is None else start + time_limit
@@ -110,7 +111,7 @@ def solve_exact(
         bound = None if lower == -math.inf else min(float(lower), cost)
         return Solution(order, heads, objective=cost, status=status, lower_bound=bound, stats=stats)
 
-    if problem.n_clusters <= 3:  # one cyclic order: its optimal heads are the optimum
+    if problem.n_clusters <= 3 and certificate is None:  # one cyclic order: its best heads win
         tour, cost = optimal_heads(problem, list(range(problem.instance.n_clusters)))
         return result(tour, "optimal", cost)
     if initial is not None:

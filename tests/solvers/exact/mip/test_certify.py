@@ -90,9 +90,20 @@ def test_only_a_proof_writes_a_certificate(tmp_path: Path) -> None:
     assert not (tmp_path / "no.cert.json.gz").exists()
 
 
-def test_three_clusters_have_no_certificate(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match="needs at least 4 clusters"):
-        Milp(certificate=str(tmp_path / "c")).solve(generate_instance(2, 3, seed=0), 0.5)
+def test_three_clusters_are_certified_by_the_model(tmp_path: Path) -> None:
+    """Three clusters (solved by enumeration without a certificate) get a certificate from the
+    model, proving the enumerated optimum; fewer clusters have none."""
+    from gtsp_bench.proof import check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    inst = generate_instance(2, 4, seed=0)  # two clusters and the depot
+    plain = Milp().solve(inst, 0.5)
+    sol = Milp(certificate=str(tmp_path / "c")).solve(inst, 0.5)
+    assert sol.status == "optimal" and sol.objective == pytest.approx(plain.objective, rel=1e-12)
+    result = check_certificate(inst, read_certificate(tmp_path / "c"))
+    assert result.proven and result.value == pytest.approx(plain.objective, rel=1e-12)
+    with pytest.raises(InputError, match="needs at least 3 clusters"):
+        Milp(certificate=str(tmp_path / "d")).solve(generate_instance(1, 3, seed=0), 0.5)
 
 
 def test_an_infeasible_lp_gives_a_farkas_proof_the_checker_accepts() -> None:
@@ -102,6 +113,7 @@ def test_an_infeasible_lp_gives_a_farkas_proof_the_checker_accepts() -> None:
     from gtsp_bench.solvers.exact.mip.options import MipOptions
 
     from gtsp_bench.proof.bounds import Domain, Space, price_duals
+    from gtsp_bench.proof.encode import to_version1
     from gtsp_bench.proof.families import parse_cut
 
     problem = price(generate_instance(5, 3, seed=2), 0.5)
@@ -116,10 +128,11 @@ def test_an_infeasible_lp_gives_a_farkas_proof_the_checker_accepts() -> None:
     log = ProofLog(model)
     log.leaf(0, log.proof("farkas", lp.backend.dual_ray(), lp.cuts, lp.cut_ids))
     tour = problem.to_tour(*_any_solution(problem))
-    cert = log.certificate(problem, tour, problem.tour_cost(tour), 0.0, [])
+    cert = to_version1(log.certificate(problem, tour, problem.tour_cost(tour), 0.0, []))
     space = Space.of(problem)
     cuts = [parse_cut(c, space.cluster_of) for c in cert["cuts"]]
-    priced = price_duals(space, cuts, cert["proofs"][0], cert["dual_bits"])
+    proof = cert["proofs"][0]
+    priced = price_duals(space, cuts, proof, proof.get("bits", cert["dual_bits"]))
     box = Domain.free(space)
     box.y[[int(model.nodes[0]), int(model.nodes[1])]] = 1
     assert priced.farkas and priced.bound(box) > 0 >= priced.bound(Domain.free(space))
