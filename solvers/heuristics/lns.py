@@ -9,7 +9,8 @@ tour replaces the current one by simulated-annealing acceptance, cooling over a 
 trial starts from the greedy tour (or the warm start, the macro tour, or the best of a race of
 ``starts``) improved by the local search, later ones from the best tour so far; a trial that did
 not improve it makes the next one hotter, and after ``restart_after`` such trials the next starts
-cold from a random-insertion tour. Above ``LARGE`` clusters the windowed re-opt and sampled
+cold from a random-insertion tour; on asymmetric costs the second trial of a ``budget`` run starts
+from the best tour reversed (``mirror``). Above ``LARGE`` clusters the windowed re-opt and sampled
 removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`, quadrant neighbour lists, edge costs
 from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re-solves at the end
 (:mod:`gtsp_bench.solvers.heuristics.lns_paths`) and two threads
@@ -217,6 +218,10 @@ class _Search:
         base, base_cost, fails = run.best.copy(), run.best_cost, 0
         cold = s.cold_after > 0 and (s.stops or deadline is not None)
         fit = s.fit_to_time and not s.stops and deadline is not None
+        # The second trial runs from the best tour reversed (asymmetric costs: trials keep a tour's
+        # direction, and each direction can be its own basin); then the trials go on as before.
+        mirror = s.mirror_for(self.symmetric) and not exact
+        saved: tuple[np.ndarray, float, float, int] | None = None  # the base the mirror set aside
         while not exact and not (run.converged and (s.stops or deadline is None)):
             if is_past(deadline):
                 run.timed_out = True
@@ -224,6 +229,13 @@ class _Search:
             if cold and fails >= s.cold_after:
                 base, base_cost = self.local_search(self.start_tour("random", deadline))
                 heat, fails = 1.0, 0
+                if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
+                    run.best, run.best_cost = base.copy(), base_cost
+                    self.progress(run.best_cost)
+            elif mirror and run.trials == 1:
+                saved, mirror = (base, base_cost, heat, fails), False
+                base, base_cost = self.local_search(run.best[::-1])
+                heat = 1.0
                 if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                     run.best, run.best_cost = base.copy(), base_cost
                     self.progress(run.best_cost)
@@ -265,9 +277,16 @@ class _Search:
             if run.timed_out:
                 break
             run.trials += 1
+            if saved is not None:  # the mirror trial: its tour is the base only if it beat the old one
+                old_cost = saved[1]
+                if costs[2] < old_cost - REL_TOL * abs(old_cost):
+                    base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
+                else:
+                    base, base_cost, heat, fails = saved
+                saved = None
             # A trial that did not improve its base: the next one starts hotter (and after
             # restart_after of them, from a fresh tour).
-            if costs[2] < base_cost - REL_TOL * abs(base_cost):
+            elif costs[2] < base_cost - REL_TOL * abs(base_cost):
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
@@ -402,6 +421,10 @@ class Lns:
         islands that go on from the best island's tour after the ``exchange`` share of the
         trials' time (in [0, 1], default 0.5; 1: never;
         :mod:`gtsp_bench.solvers.heuristics.lns_islands`).
+    mirror
+        The second trial starts from the best tour reversed, and its tour replaces the base only
+        if it beat it (default: on asymmetric costs with effort ``budget``; a tour's direction can
+        be a basin of its own there).
     """
 
     asymmetric = True
@@ -420,6 +443,7 @@ class Lns:
         start_iterations: int = 5,
         paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
         fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
+        mirror: bool | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
@@ -427,7 +451,7 @@ class Lns:
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, fail_passes, workers,
-                                    exchange, effort)
+                                    exchange, effort, mirror)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

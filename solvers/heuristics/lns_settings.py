@@ -84,6 +84,7 @@ class LnsSettings:
     workers: int | None = None
     exchange: float = 0.5
     effort: str | None = None
+    mirror: bool | None = None
 
     def __post_init__(self) -> None:
         if self.iterations is not None:
@@ -136,6 +137,8 @@ class LnsSettings:
         if self.workers is not None:
             check_int("workers", self.workers, 1)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
+        if self.mirror is not None:
+            check_bool("mirror", self.mirror)
 
     @property
     def preset(self) -> Effort:
@@ -217,6 +220,15 @@ class LnsSettings:
         if not (n > LARGE and timed and not self.stops):
             return 1
         return self.workers if self.workers is not None else default_workers()
+
+    def mirror_for(self, symmetric: bool) -> bool:
+        """Whether the second trial starts from the best tour reversed: ``mirror``, by default on
+        asymmetric costs with effort ``budget`` (there a tour and its reversal can lie in separate
+        basins, and the trials, which keep a tour's direction, do not cross from one to the other;
+        on ``35ftv170`` the reversal of the 1,205 optimum is a trap at 1,247)."""
+        if self.mirror is not None:
+            return self.mirror
+        return not symmetric and not self.stops
 
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with
