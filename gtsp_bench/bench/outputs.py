@@ -56,13 +56,26 @@ PACKAGES = (
 )
 
 
-def _git(*args: str) -> str:
+#: Folders whose changes do not make a run's checkout dirty: what runs write (tables, doc blocks).
+OUTPUT_FOLDERS = ("results", "docs")
+
+
+def _git(*args: str, cwd: Path | None = None) -> str:
     try:
         return subprocess.run(
-            ["git", *args], capture_output=True, text=True, timeout=10, cwd=Path(__file__).resolve().parent
+            ["git", *args], capture_output=True, text=True, timeout=10,
+            cwd=cwd or Path(__file__).resolve().parent,
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return ""
+
+
+def tree_dirty(cwd: Path | None = None) -> bool:
+    """Whether tracked files outside :data:`OUTPUT_FOLDERS` differ from the commit: the code,
+    instances or settings a run used were not the commit's. A run's own outputs (a rerun rewrites
+    ``results/NAME`` before its manifest) do not count."""
+    excludes = [f":(top,exclude){folder}" for folder in OUTPUT_FOLDERS]
+    return bool(_git("status", "--porcelain", "--untracked-files=no", "--", ":/", *excludes, cwd=cwd))
 
 
 def _cpu_model() -> str:
@@ -99,7 +112,7 @@ def manifest(
         "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
         "command": command or " ".join(["gtsp-bench", *sys.argv[1:]]),
         "git_commit": commit or None,
-        "git_dirty": bool(_git("status", "--porcelain", "--untracked-files=no")) if commit else None,
+        "git_dirty": tree_dirty() if commit else None,
         "python": platform.python_version(),
         "packages": versions,
         "cpu_model": _cpu_model(),
