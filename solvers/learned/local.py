@@ -105,6 +105,7 @@ class Walk:
         self.n_clusters = n_clusters
         self.k = k
         self.cent = env.coords.mean(2)  # (B, K, 2)
+        self.cent_rows = self.cent[self.inst]  # (R, K, 2)
         self.depot = env.depot[self.inst]  # (R, 2)
         self.pos = self.depot.clone()
         self.visited = torch.zeros((self.r, n_clusters), dtype=torch.bool)
@@ -119,7 +120,7 @@ class Walk:
 
     def view(self) -> View:
         """The view from the current points."""
-        cent = self.cent[self.inst]  # (R, K, 2)
+        cent = self.cent_rows
         d = (cent - self.pos[:, None]).pow(2).sum(-1).sqrt().masked_fill(self.visited, math.inf)
         dist, cluster = d.topk(min(self.k, self.n_clusters), dim=1, largest=False)
         if self.k > self.n_clusters:  # fewer clusters than candidates: pad (masked below)
@@ -260,8 +261,11 @@ class LocalPolicy(nn.Module):
         walk = Walk(env, starts, self.k, flight_per_m)
         maps = frame(starts).repeat(env.shape[0], 1, 1)
         steps, logp = [], torch.zeros(walk.r)
-        for _ in range(walk.n_clusters):
+        for step in range(walk.n_clusters):
             v = walk.view()
+            if mode == "greedy" and step == walk.n_clusters - 1:  # one cluster left: log p = 0
+                steps.append(walk.move(v, v.mask.int().argmax(-1)))
+                continue
             logits = self.scores(*turn(v, maps), v.mask)
             lp = torch.log_softmax(logits, -1)
             if mode == "greedy":

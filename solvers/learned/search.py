@@ -6,15 +6,18 @@ One greedy decode is the policy's best guess; a search spends more time for a be
    (POMO-style instance augmentation); the best tour, optimal heads.
 2. **Local search** (``ls``, default on): the shared 2-opt / or-opt / heads search
    (:mod:`gtsp_bench.solvers.heuristics.local_search`) to its local optimum.
-3. **Re-construction by the policy** (LEHD's random re-construct): each round picks ``width``
-   random segments of the current tour (one random length per round, random positions, half of
-   them flown backwards) and re-decodes each greedily with the policy as a small problem of its
-   own: the UAV starts where the tour enters the segment, the segment's clusters are the
-   unvisited ones, and the point where the tour leaves it stands in for the depot (the policy's
-   "return home"), each segment seen in its own random rotated frame. The candidate tours are
-   priced with optimal heads; the best is kept if it is better (then ``ls`` again). Rounds go on
-   until the next would end past the budget (judged by the last round's time) or ``patience``
-   rounds in a row found nothing better.
+3. **Re-construction by the policy** (LEHD's random re-construct): each round draws one segment
+   length, cuts the current tour into consecutive segments of that length from a random offset
+   (:func:`partition`) and re-decodes every segment ``max(1, width // segments)`` times, all in
+   one batch (:func:`reconstruct`): each copy greedily with the policy as a small problem of its
+   own (the UAV starts where the tour enters the segment, the segment's clusters are the
+   unvisited ones, and the point where the tour leaves it stands in for the depot, the policy's
+   "return home"), in its own random rotated frame, half of them flown backwards. The
+   candidates are priced with optimal heads; every segment whose best copy is better replaces
+   its old run at once (the merged tour is kept if it beats the best single candidate), then
+   ``ls`` again. Rounds go on until the time is spent (the last round is cut to the length that
+   fits, judged by the previous round's seconds per step) or ``patience`` rounds in a row found
+   nothing better.
 
 The budget is ``seconds_per_cluster`` * K (default 0.01 s: 1 s at K = 100, 2 s at K = 200), or
 the runner's time limit where smaller. The search is seeded (the segments and frames); on a
@@ -42,7 +45,7 @@ from gtsp_bench.checks import check_bool, check_float, check_int
 from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
-from gtsp_bench.problem import Problem, price
+from gtsp_bench.problem import price
 from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
@@ -106,9 +109,13 @@ def reconstruct(model: LocalPolicy, env: EnvBatch, order: torch.Tensor, heads: t
     walk.visited = visited
     maps = random_maps(r, generator)
     steps = []
-    for _ in range(length):
+    for step in range(length):
         v = walk.view()
-        steps.append(walk.move(v, model.scores(*turn(v, maps), v.mask).argmax(-1)))
+        if step == length - 1:  # one cluster left: no choice to score
+            choice = v.mask.int().argmax(-1)
+        else:
+            choice = model.scores(*turn(v, maps), v.mask).argmax(-1)
+        steps.append(walk.move(v, choice))
     new = torch.stack(steps, 1)
     new = torch.where(back, new.flip(1), new)
     out = order.repeat(r, 1)
@@ -116,15 +123,25 @@ def reconstruct(model: LocalPolicy, env: EnvBatch, order: torch.Tensor, heads: t
     return out
 
 
+def partition(k: int, length: int, rng: np.random.Generator) -> np.ndarray:
+    """First positions of ``k // length`` consecutive segments of ``length`` clusters that tile
+    a tour of ``k`` clusters from a random offset (the rest, fewer than ``length``, is left
+    as it is; the depot is never inside a segment)."""
+    n = k // length
+    offset = int(rng.integers(0, k - n * length + 1))
+    return offset + length * np.arange(n)
+
+
 class LocalSearchSolver(LearnedSolver):
     """The local-view policy as a search: multi-start, local search, re-construction of segments.
 
     Default policy: ``solvers/learned/checkpoints/local-l3.pt``. Options: ``checkpoint``,
     ``starts`` (rotated greedy decodes first, default 8), ``seconds_per_cluster`` (the budget
-    per instance is this times K, default 0.01), ``width`` (segments re-decoded per round, default
-    16), ``max_segment`` (longest segment, default 40 clusters), ``patience`` (rounds in a row
-    without a better tour before it stops, default 100), ``ls`` (the shared local search after
-    each better tour, default true), ``threads``. Heads are always optimal for the order.
+    per instance is this times K, default 0.01), ``width`` (decodes per round, default 16),
+    ``min_segment``, ``max_segment`` (segment lengths drawn, default 2 to 60 clusters),
+    ``patience`` (rounds in a row without a better tour before it stops, default 100), ``ls``
+    (the shared local search after each better tour, default true), ``threads``. Heads are
+    always optimal for the order.
     """
 
     model_name = "local"
@@ -132,14 +149,16 @@ class LocalSearchSolver(LearnedSolver):
     default_heads = "optimal"
 
     def __init__(self, checkpoint: str | None = None, starts: int = 8,
-                 seconds_per_cluster: float = 0.01, width: int = 16, max_segment: int = 40,
-                 patience: int = 100, ls: bool = True, threads: int = 1) -> None:
+                 seconds_per_cluster: float = 0.01, width: int = 16, min_segment: int = 2,
+                 max_segment: int = 60, patience: int = 100, ls: bool = True,
+                 threads: int = 1) -> None:
         super().__init__(checkpoint, "optimal", samples=0, threads=threads)
         self.starts = check_int("starts", starts, 1)
         self.seconds_per_cluster = check_float("seconds_per_cluster", seconds_per_cluster, 0.0,
                                                math.inf)
         self.width = check_int("width", width, 1)
-        self.max_segment = check_int("max_segment", max_segment, 2)
+        self.min_segment = check_int("min_segment", min_segment, 2)
+        self.max_segment = check_int("max_segment", max_segment, self.min_segment)
         self.patience = check_int("patience", patience, 1)
         self.ls = check_bool("ls", ls)
 
@@ -161,43 +180,46 @@ class LocalSearchSolver(LearnedSolver):
         deadline = start + budget
         torch.set_num_threads(self.threads)
         env = env_from_instances([instance], [omega])
-        problem = price(instance, omega)
+        search = LocalSearch(price(instance, omega)) if self.ls else None
         gen = torch.Generator().manual_seed(int(seed))
         rng = np.random.default_rng([int(seed), 7])
         k = instance.n_clusters
         rounds = better = 0
         with torch.inference_mode():
+            t_decode = time.perf_counter()
             orders, _ = self.model.decode(env, "greedy", starts=self.starts)
+            # seconds per decoding step of a round's batch, first judged by the starts' decode
+            per_step = (time.perf_counter() - t_decode) / k * max(1.0, self.width / self.starts)
             hs, costs = optimal_heads_batch(env.repeat(self.starts), orders)
             j = int(costs.argmin())
             order, heads, cost = orders[j], hs[j], float(costs[j])
             progress(cost)
             if self.ls:
-                order, heads, cost = self._local_search(problem, env, order, heads, cost, deadline)
+                order, heads, cost = self._local_search(search, env, order, heads, cost, deadline)
                 progress(cost)
-            stall, last = 0, 0.0  # last: seconds of the latest round (none is started that
-            # would end past the deadline)
-            while time.perf_counter() + last < deadline and stall < self.patience and k >= 2:
+            stall = 0
+            shortest = min(self.min_segment, k)
+            while stall < self.patience and k >= 2:
                 t_round = time.perf_counter()
-                length = int(rng.integers(min(2, k), min(self.max_segment, k) + 1))
-                seg_starts = rng.integers(0, k - length + 1, self.width)
-                backwards = rng.random(self.width) < 0.5
-                cand = reconstruct(self.model, env, order, heads, seg_starts, length, backwards,
-                                   gen)
-                ch, cc = optimal_heads_batch(env.repeat(self.width), cand)
-                j = int(cc.argmin())
+                length = int(rng.integers(shortest, min(self.max_segment, k) + 1))
+                # the last round is cut to what fits in the time left (none starts that would
+                # end past the deadline)
+                length = min(length, int((deadline - t_round) / per_step))
+                if length < shortest:
+                    break
+                found = self._round(env, order, heads, cost, length, rng, gen)
                 rounds += 1
-                if float(cc[j]) < cost - REL_TOL * abs(cost):
-                    order, heads, cost = cand[j], ch[j], float(cc[j])
+                if found is not None:
+                    order, heads, cost = found
                     if self.ls:
-                        order, heads, cost = self._local_search(problem, env, order, heads, cost,
+                        order, heads, cost = self._local_search(search, env, order, heads, cost,
                                                                 deadline)
                     progress(cost)
                     better += 1
                     stall = 0
                 else:
                     stall += 1
-                last = time.perf_counter() - t_round
+                per_step = (time.perf_counter() - t_round) / length
         o = tuple(int(c) for c in order)
         h = unpad_heads(heads.tolist(), instance.sizes)
         value = evaluate(instance, omega, o, h).objective
@@ -205,14 +227,49 @@ class LocalSearchSolver(LearnedSolver):
                         stats={"heads": "optimal", "rounds": rounds, "better": better,
                                "budget_s": budget, "wall_s": time.perf_counter() - start})
 
+    def _round(self, env: EnvBatch, order: torch.Tensor, heads: torch.Tensor, cost: float,
+               length: int, rng: np.random.Generator, gen: torch.Generator,
+               ) -> tuple[torch.Tensor, torch.Tensor, float] | None:
+        """One round of re-construction: the tour cut into segments of ``length`` clusters
+        (:func:`partition`), each re-decoded ``copies`` times (own frames and directions) in one
+        batch; every segment whose best copy is better replaces its old run. Returns the better
+        tour, or ``None``."""
+        k = env.shape[1]
+        seg = partition(k, length, rng)
+        copies = max(1, self.width // len(seg))
+        starts = np.repeat(seg, copies)
+        backwards = rng.random(len(starts)) < 0.5
+        cand = reconstruct(self.model, env, order, heads, starts, length, backwards, gen)
+        ch, cc = optimal_heads_batch(env.repeat(len(starts)), cand)
+        tol = REL_TOL * abs(cost)
+        j = int(cc.argmin())
+        if not float(cc[j]) < cost - tol:
+            return None
+        best = (cand[j], ch[j], float(cc[j]))
+        pick = cc.view(len(seg), copies).argmin(1) + torch.arange(len(seg)) * copies
+        gain = cost - cc[pick]
+        rows = pick[gain > tol]
+        if len(rows) > 1:  # every better segment at once (they do not overlap)
+            merged = order.clone()
+            for r in rows.tolist():
+                a = int(starts[r])
+                merged[a:a + length] = cand[r, a:a + length]
+            mh, mc = optimal_heads_batch(env, merged[None])
+            if float(mc[0]) < best[2]:
+                best = (merged, mh[0], float(mc[0]))
+        return best
+
     @staticmethod
-    def _local_search(problem: Problem, env: EnvBatch, order: torch.Tensor, heads: torch.Tensor,
-                      cost: float, deadline: float) -> tuple[torch.Tensor, torch.Tensor, float]:
+    def _local_search(search: LocalSearch | None, env: EnvBatch, order: torch.Tensor,
+                      heads: torch.Tensor, cost: float, deadline: float,
+                      ) -> tuple[torch.Tensor, torch.Tensor, float]:
         """The shared local search from the tour; the tour back as policy tensors (heads of
         padded clusters mapped to node 0 first)."""
+        if search is None:
+            return order, heads, cost
+        problem = search.problem
         h = unpad_heads(heads.tolist(), [len(c) for c in problem.clusters[:-1]])
-        tour, new_cost, _ = LocalSearch(problem).run(problem.to_tour(order.tolist(), list(h)),
-                                                     deadline)
+        tour, new_cost, _ = search.run(problem.to_tour(order.tolist(), list(h)), deadline)
         if new_cost >= cost:
             return order, heads, cost
         o, _ = problem.to_solution(tour)

@@ -84,7 +84,8 @@ def test_reconstruct_keeps_the_rest_of_the_tour(tmp_path):
 def test_bad_options_are_refused_with_the_valid_names():
     with pytest.raises(InputError, match="options: checkpoint, starts"):
         get_solver("local-search", bogus=1)
-    for bad in ({"width": 0}, {"seconds_per_cluster": -1.0}, {"max_segment": 1}, {"ls": "maybe"}):
+    for bad in ({"width": 0}, {"seconds_per_cluster": -1.0}, {"max_segment": 1}, {"ls": "maybe"},
+                {"min_segment": 10, "max_segment": 5}):
         with pytest.raises(InputError):
             LocalSearchSolver(**bad)
 
@@ -101,3 +102,43 @@ def test_shipped_policy_loads_on_the_cpu_and_a_wrong_file_is_one_line(tmp_path):
     with pytest.raises(InputError, match="holds a 'am' model, not 'local'") as err:
         LocalSearchSolver(checkpoint=str(am)).solve(inst, 0.3)
     assert "\n" not in str(err.value)
+
+
+def test_partition_tiles_the_tour_with_disjoint_segments():
+    """Consecutive segments of one length, inside the tour, k // length of them."""
+    from gtsp_bench.solvers.learned.search import partition
+
+    rng = np.random.default_rng(0)
+    for k, length in ((10, 2), (10, 3), (100, 7), (100, 60), (37, 37), (200, 41)):
+        for _ in range(20):
+            st = partition(k, length, rng)
+            assert len(st) == k // length
+            assert st[0] >= 0 and st[-1] + length <= k
+            assert np.all(np.diff(st) == length)
+
+
+def test_a_round_gives_a_better_tour_priced_exactly_or_none(tmp_path):
+    """From a random tour, rounds of re-construction (several segments replaced at once) give
+    permutations whose cost is below the old one and equals their optimal-heads price."""
+    _, path = _tiny(tmp_path)
+    solver = LocalSearchSolver(checkpoint=str(path))
+    inst = instance_set(1, 40, 4_343, 6)[0]
+    env = env_from_instances([inst], [0.3])
+    order = torch.randperm(40, generator=torch.Generator().manual_seed(2))
+    heads, cost = optimal_heads_batch(env, order[None])
+    heads, cost = heads[0], float(cost[0])
+    rng, gen = np.random.default_rng(0), torch.Generator().manual_seed(0)
+    improved = 0
+    with torch.inference_mode():
+        for length in (4, 5, 8, 10, 4, 5):
+            found = solver._round(env, order, heads, cost, length, rng, gen)
+            if found is None:
+                continue
+            new_order, new_heads, new_cost = found
+            assert sorted(new_order.tolist()) == list(range(40))
+            assert new_cost < cost
+            assert new_cost == pytest.approx(
+                float(optimal_heads_batch(env, new_order[None])[1][0]), rel=1e-12)
+            order, heads, cost = new_order, new_heads, new_cost
+            improved += 1
+    assert improved >= 1
