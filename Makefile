@@ -54,7 +54,7 @@ bench-all: $(STAMP)
 	status=0; for b in $(BENCH_ALL); do \
 		$(BIN)/python -m gtsp_bench.cli bench $$b $(BENCH_ARGS) || status=1; done; exit $$status
 
-# Train the local-view policy by imitating lns tours (the shipped checkpoints/local.pt; about 45
+# Train the local-view policy by imitating lns tours (the shipped checkpoints/local.pt; 33-45
 # minutes on one core: labels, then 27 minutes of training). TRAIN_ARGS for more options.
 TRAIN_ARGS ?=
 train-local: $(STAMP)
