@@ -25,7 +25,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import statistics
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -331,23 +331,29 @@ def _source(row: pd.Series) -> str:
     )
 
 
+def _best_rows(df: pd.DataFrame) -> Iterator[tuple[tuple[str, str, float | None], pd.DataFrame, pd.Series]]:
+    """Per ``(set, instance, omega)`` of the answered rows (omega ``None``: distance-only): its
+    rows and the one with the lowest objective."""
+    ok = df[df["objective"].notna()]
+    omega = ok["omega"].astype(float).fillna(-1.0)
+    for (s, inst, w), g in ok.groupby(["set", "instance", omega], sort=False):
+        yield (s, inst, None if w < 0 else float(w)), g, g.iloc[int(g["objective"].to_numpy().argmin())]
+
+
 def new_references(df: pd.DataFrame, today: str) -> dict[str, list[Any]]:
     """Per set folder, the reference rows the run's best tours give: the best objective of each
     (instance, omega), ``optimal`` when a solve proved it, its best lower bound."""
     from gtsp_bench.data.sets import ReferenceRow
 
     out: dict[str, list[Any]] = {}
-    ok = df[df["objective"].notna()]
-    omega = ok["omega"].astype(float).fillna(-1.0)
-    for (s, inst, w), g in ok.groupby(["set", "instance", omega], sort=False):
-        best = g.iloc[int(g["objective"].to_numpy().argmin())]
+    for (s, inst, w), g, best in _best_rows(df):
         proven = bool((g["status"] == "optimal").any())
         lower = g["lower_bound"].max()
         source = _source(best)
         out.setdefault(s, []).append(
             ReferenceRow(
                 inst,
-                None if w < 0 else float(w),
+                w,
                 float(best["objective"]),
                 None if not math.isfinite(lower) else float(lower),
                 "optimal" if proven else "best_known",
@@ -374,19 +380,14 @@ def _set_named(name: str, settings: Any) -> Any:
     return None
 
 
-def _repriced(found: Any, row: Any, df: pd.DataFrame) -> Any:
-    """``row`` valued at the exact cost of the run's best tour for its point, re-priced from the
-    set's instance file (rows.csv keeps 10 digits); as it is when the rows hold no tour."""
+def _repriced(found: Any, row: Any, best: pd.Series) -> Any:
+    """``row`` valued at the exact cost of ``best``'s tour, re-priced from the set's instance file
+    (rows.csv keeps 10 digits); as it is when the row holds no tour."""
     from gtsp_bench.data.io import read_instance
     from gtsp_bench.energy import evaluate
 
-    g = df[(df["set"] == found.name) & (df["instance"] == row.instance) & df["objective"].notna()]
-    g = g[g["omega"].isna()] if row.omega is None else g[g["omega"].astype(float) == row.omega]
     path = next((f.path for f in found.files if f.stem == row.instance), None)
-    if path is None or g.empty:
-        return row
-    best = g.loc[g["objective"].astype(float).idxmin()]
-    if pd.isna(best["order"]) or not str(best["order"]).strip():
+    if path is None or pd.isna(best["order"]) or not str(best["order"]).strip():
         return row
     order, heads = (list(map(int, str(best[c]).split())) for c in ("order", "heads"))
     return replace(row, value=evaluate(read_instance(path), row.omega, order, heads).objective)
@@ -404,6 +405,7 @@ def _update_references(
     today = dt.date.today().isoformat()
     library = set(gtsplib.names())
     settled = {s for s, g in df.groupby("set") if (g["reference_kind"] == "optimal").all()}
+    tours = {point: best for point, _, best in _best_rows(df)}
     written = []
     for set_name, rows in new_references(df, today).items():
         s = _set_named(set_name, settings)
@@ -417,11 +419,12 @@ def _update_references(
         have = read_reference(s.reference_path)
         merged = dict(have)
         changed = []
-        for r in (_repriced(s, row, df) for row in rows):
+        for r in rows:
             old = have.get((r.instance, r.omega))
             if old is None or (
                 old.status != "optimal" and (strictly_better(r.value, old.value) or r.status == "optimal")
             ):
+                r = _repriced(s, r, tours[(set_name, r.instance, r.omega)])
                 if old is not None and old.lower_bound is not None:  # a bound holds whatever the tour
                     r = replace(r, lower_bound=max(old.lower_bound, r.lower_bound or old.lower_bound))
                 merged[(r.instance, r.omega)] = r
