@@ -95,9 +95,14 @@ class Walk:
         Candidates in the view.
     flight_per_m
         The UAV's flight energy per metre (J/m) of the instances, for the floor on the edge cost.
+    shrink
+        Whether a view has fewer than ``k`` candidates once fewer clusters are left (in every
+        row): cheaper, and the scores are the same, since candidates that do not exist are
+        masked out of the attention. Off, every view has ``k`` (training stacks views).
     """
 
-    def __init__(self, env: EnvBatch, starts: int, k: int, flight_per_m: torch.Tensor) -> None:
+    def __init__(self, env: EnvBatch, starts: int, k: int, flight_per_m: torch.Tensor,
+                 shrink: bool = False) -> None:
         b, n_clusters, _ = env.shape
         self.env = env
         self.inst = torch.arange(b).repeat_interleave(starts)
@@ -114,49 +119,68 @@ class Walk:
         self.per_m = torch.maximum(w, MIN_EDGE_FRACTION * flight_per_m[self.inst])
         self.omega = env.omega[self.inst]
         self.rows = torch.arange(self.r)
+        self.shrink = shrink
         #: Clusters of the (sub)problem, for the context's fraction left (a re-constructed
         #: segment is a problem of its own size).
         self.size = n_clusters
+        # Per cluster, flattened to (B * K, ...) so that one index picks a row's candidates.
+        _, _, n_nodes, _ = env.coords.shape
+        self._flat_xy = env.coords.reshape(b * n_clusters, n_nodes, 2)
+        self._flat_nc = env.node_cost.reshape(b * n_clusters, n_nodes)
+        self._flat_nc_min = self._flat_nc.min(-1).values
+        self._flat_cent = self.cent.reshape(b * n_clusters, 2)
+        self._row_base = (self.inst * n_clusters)[:, None]  # (R, 1) first flat index of a row
 
     def view(self) -> View:
         """The view from the current points."""
         cent = self.cent_rows
-        d = (cent - self.pos[:, None]).pow(2).sum(-1).sqrt().masked_fill(self.visited, math.inf)
-        dist, cluster = d.topk(min(self.k, self.n_clusters), dim=1, largest=False)
-        if self.k > self.n_clusters:  # fewer clusters than candidates: pad (masked below)
-            extra = self.k - self.n_clusters
-            dist = torch.cat([dist, dist.new_full((self.r, extra), math.inf)], 1)
+        d2 = _sq_norm(cent - self.pos[:, None]).masked_fill_(self.visited, math.inf)
+        width = self.k
+        if self.shrink:  # only as many tokens as the row with most clusters left needs
+            width = max(1, min(self.k, int((~self.visited).sum(1).max())))
+        d2, cluster = d2.topk(min(width, self.n_clusters), dim=1, largest=False)
+        if width > self.n_clusters:  # fewer clusters than candidates: pad (masked below)
+            extra = width - self.n_clusters
+            d2 = torch.cat([d2, d2.new_full((self.r, extra), math.inf)], 1)
             cluster = torch.cat([cluster, cluster.new_zeros((self.r, extra))], 1)
-        mask = torch.isfinite(dist)
-        cluster = torch.where(mask, cluster, cluster[:, :1])
-        scale = dist.masked_fill(~mask, 0.0).max(1).values.clamp_min(1.0)  # (R,)
-        ii = self.inst[:, None]
-        xy = self.env.coords[ii, cluster]  # (R, k, N, 2)
-        nc = self.env.node_cost[ii, cluster]  # (R, k, N)
-        reach = (xy - self.pos[:, None, None]).pow(2).sum(-1).sqrt()
-        j = (self.edge[:, None, None] * reach + nc).argmin(-1)  # (R, k)
-        entry_xy = xy.gather(2, j[..., None, None].expand(-1, -1, 1, 2))[:, :, 0]
-        excess = nc.gather(2, j[..., None])[..., 0] - nc.min(-1).values
+        mask = torch.isfinite(d2)
+        full = bool(mask.all())
+        if not full:
+            cluster = torch.where(mask, cluster, cluster[:, :1])
+            d2 = d2.masked_fill(~mask, 0.0)
+        scale = d2.amax(1).sqrt_().clamp_min_(1.0)  # (R,) the farthest candidate's distance
+        flat = self._row_base + cluster  # (R, k) flat cluster index
+        xy = self._flat_xy[flat]  # (R, k, N, 2)
+        nc = self._flat_nc[flat]  # (R, k, N)
+        rel_xy = xy - self.pos[:, None, None]
+        reach = _sq_norm(rel_xy).sqrt_()
+        j = torch.addcmul(nc, self.edge[:, None, None], reach).argmin(-1, keepdim=True)  # (R, k, 1)
+        pick = j[..., None].expand(-1, -1, 1, 2)
+        rel_entry = rel_xy.gather(2, pick)[:, :, 0]
+        entry_xy = xy.gather(2, pick)[:, :, 0]
         s = scale[:, None]
-        excess = (excess / self.per_m[:, None] / s).clamp(0.0, EXCESS_CLIP)
-        c_xy = cent.gather(1, cluster[..., None].expand(-1, -1, 2))
-        home = (c_xy - self.depot[:, None]).pow(2).sum(-1).sqrt() / s
-        rel = torch.stack([entry_xy - self.pos[:, None], c_xy - self.pos[:, None]], 2)
+        excess = nc.gather(2, j)[..., 0] - self._flat_nc_min[flat]
+        excess = (excess / (self.per_m[:, None] * s)).clamp_(0.0, EXCESS_CLIP)
+        c_xy = self._flat_cent[flat]  # (R, k, 2)
+        home = (c_xy - self.depot[:, None]).norm(dim=-1) / s
+        rel = torch.stack([rel_entry, c_xy - self.pos[:, None]], 2)
         cand_vec = rel / s[..., None, None]
         cand_sc = torch.stack([excess, torch.log1p(home)], -1)
         left = ~self.visited
         n_left = left.sum(1).clamp_min(1)
-        mass = (cent * left[..., None]).sum(1) / n_left[:, None]
+        mass = torch.bmm(left[:, None].to(cent.dtype), cent)[:, 0] / n_left[:, None]
         to_depot = self.depot - self.pos
         to_mass = mass - self.pos
         dd = to_depot.norm(dim=-1)
         ctx_vec = torch.stack([to_depot / dd.clamp_min(1e-6)[:, None],
                                to_mass / to_mass.norm(dim=-1).clamp_min(1e-6)[:, None]], 1)
         ctx_sc = torch.stack([self.omega, n_left / self.size, torch.log1p(dd / scale)], -1)
-        zero = ~mask
-        return View(cand_vec.masked_fill(zero[..., None, None], 0.0).float(),
-                    cand_sc.masked_fill(zero[..., None], 0.0).float(), ctx_vec.float(),
-                    ctx_sc.float(), mask, cluster, entry_xy)
+        if not full:
+            zero = ~mask
+            cand_vec = cand_vec.masked_fill(zero[..., None, None], 0.0)
+            cand_sc = cand_sc.masked_fill(zero[..., None], 0.0)
+        return View(cand_vec.float(), cand_sc.float(), ctx_vec.float(), ctx_sc.float(), mask,
+                    cluster, entry_xy)
 
     def goto(self, cluster: torch.Tensor) -> None:
         """Visit ``cluster`` ``(R,)`` (any unvisited one) through its entry node from the
@@ -177,6 +201,13 @@ class Walk:
         self.visited = self.visited.clone()
         self.visited[self.rows, cluster] = True
         return cluster
+
+
+def _sq_norm(v: torch.Tensor) -> torch.Tensor:
+    """Squared length of 2-D vectors ``(..., 2)``: x * x + y * y (as a sum over the last axis
+    gives, much faster than a reduction over an axis of length 2)."""
+    x, y = v[..., 0], v[..., 1]
+    return torch.addcmul(x * x, y, y)
 
 
 def frame(starts: int) -> torch.Tensor:
@@ -238,10 +269,16 @@ class LocalPolicy(nn.Module):
         r, k = mask.shape
         tc = self.cand(torch.cat([cand_vec.reshape(r, k, -1), cand_sc], -1))
         tx = self.ctx(torch.cat([ctx_vec.reshape(r, -1), ctx_sc], -1))[:, None]
-        pad = torch.cat([mask.new_zeros((r, 1)), ~mask], 1)
+        # no padding mask while every candidate exists (most steps): a plain softmax is faster
+        pad = None if bool(mask.all()) else torch.cat([mask.new_zeros((r, 1)), ~mask], 1)
         h = self.encoder(torch.cat([tx, tc], 1), src_key_padding_mask=pad)
-        hc, hx = h[:, 1:], h[:, :1].expand(-1, k, -1)
-        logits = self.score(torch.cat([hc, hx], -1)).squeeze(-1)
+        # the score MLP's first layer on [candidate, context] as two products: the context's once
+        first, act, last = self.score
+        d = h.shape[-1]
+        w = first.weight
+        ctx_part = torch.addmm(first.bias, h[:, 0], w[:, d:].t())  # (R, dim)
+        hidden = act(nn.functional.linear(h[:, 1:], w[:, :d]).add_(ctx_part[:, None]))
+        logits = last(hidden).squeeze(-1)
         return logits.masked_fill(~mask, -math.inf)
 
     def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
@@ -258,7 +295,7 @@ class LocalPolicy(nn.Module):
         """
         if flight_per_m is None:
             flight_per_m = _flight_per_m(env)
-        walk = Walk(env, starts, self.k, flight_per_m)
+        walk = Walk(env, starts, self.k, flight_per_m, shrink=True)
         maps = frame(starts).repeat(env.shape[0], 1, 1)
         steps, logp = [], torch.zeros(walk.r)
         for step in range(walk.n_clusters):

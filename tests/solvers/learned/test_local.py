@@ -103,3 +103,43 @@ def test_scores_mask_missing_candidates():
     logits = model.scores(torch.randn(1, 4, 2, 2), torch.randn(1, 4, 2), torch.randn(1, 2, 2),
                           torch.randn(1, 3), mask)
     assert torch.isinf(logits[0, 2:]).all() and torch.isfinite(logits[0, :2]).all()
+
+
+def test_shrunk_view_scores_as_the_padded_one():
+    """With fewer clusters left than candidates, a shrunk view (as decoding uses) has only the
+    clusters left, and the policy scores them as in the padded view (padding is masked out of the
+    attention), with or without missing candidates in some rows."""
+    torch.manual_seed(0)
+    env, _ = _env(12, n=2)
+    model = LocalPolicy(dim=16, n_heads=2, n_layers=2, ff=32, k=8).eval()
+    walks = [Walk(env, 2, 8, _flight_per_m(env), shrink=s) for s in (False, True)]
+    for w in walks:  # rows 0-1 visit 7 clusters, rows 2-3 visit 8
+        visited = torch.zeros((4, 12), dtype=torch.bool)
+        visited[:2, :7] = True
+        visited[2:, :8] = True
+        w.visited = visited
+    padded, shrunk = (w.view() for w in walks)
+    assert padded.mask.shape == (4, 8) and shrunk.mask.shape == (4, 5)
+    assert torch.equal(padded.cluster[:, :5][shrunk.mask], shrunk.cluster[shrunk.mask])
+    with torch.inference_mode():
+        a = model.scores(*turn(padded, frame(4)), padded.mask)
+        b = model.scores(*turn(shrunk, frame(4)), shrunk.mask)
+    assert torch.isinf(a[:, 5:]).all()
+    assert torch.allclose(a[:, :5][shrunk.mask], b[shrunk.mask], atol=1e-5)
+    assert torch.isinf(b[~shrunk.mask]).all()
+
+
+def test_decoding_with_shrunk_views_matches_padded_views():
+    """Greedy decoding (shrunk views) gives the tours that padded views give."""
+    torch.manual_seed(1)
+    env, _ = _env(10, n=3)
+    model = LocalPolicy(dim=16, n_heads=2, n_layers=2, ff=32, k=16).eval()
+    with torch.inference_mode():
+        order, _ = model.decode(env, starts=2)
+        walk = Walk(env, 2, 16, _flight_per_m(env))
+        maps = frame(2).repeat(3, 1, 1)
+        steps = []
+        for _ in range(10):
+            v = walk.view()
+            steps.append(walk.move(v, model.scores(*turn(v, maps), v.mask).argmax(-1)))
+    assert torch.equal(order, torch.stack(steps, 1))
