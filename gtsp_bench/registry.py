@@ -25,7 +25,7 @@ import statistics
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 from typing import Any
@@ -240,18 +240,32 @@ def get_solver(name: str, **options: Any) -> Solver:
     InputError
         For an unknown name (listing the valid ones) or an option the solver does not take.
     """
+    cls = _solver_class(name)
+    check_option_names(name, options)
+    return cls(**options)
+
+
+def _solver_class(name: str) -> type:
     registry = _registry()
     if name not in registry:
         raise InputError(f"unknown solver {name!r} (valid: {', '.join(solver_names())})")
-    cls = registry[name].load()
-    if options:
-        params = inspect.signature(cls).parameters
-        takes_kwargs = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
-        unknown = [k for k in options if k not in params]
-        if unknown and not takes_kwargs:
-            valid = ", ".join(params) or "none"
-            raise InputError(f"solver {name!r} has no option {unknown[0]!r} (options: {valid})")
-    return cls(**options)
+    return registry[name].load()
+
+
+def check_option_names(name: str, options: Iterable[str]) -> None:
+    """:class:`InputError` (one line, listing the valid ones) when the registered solver ``name``
+    takes none of an option of ``options`` (its keyword names); the values are the solver's to
+    check."""
+    given = list(options)
+    if not given:
+        return
+    params = inspect.signature(_solver_class(name)).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return
+    unknown = [k for k in given if k not in params]
+    if unknown:
+        valid = ", ".join(params) or "none"
+        raise InputError(f"solver {name!r} has no option {unknown[0]!r} (options: {valid})")
 
 
 # ---------------------------------------------------------------------- harness

@@ -12,6 +12,7 @@ of it, turns records into rows (:mod:`gtsp_bench.bench.rows`) and writes the out
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -69,6 +70,8 @@ class Settings:
     retry_failed: bool = False
     update_reference: bool = False
     command: str = ""
+    #: Solver options (``-p KEY=VALUE``) for every run: added to its options and its label.
+    params: tuple[tuple[str, Any], ...] = ()
 
 
 def _with_instances(src: Any, n: int) -> Any:
@@ -129,6 +132,11 @@ def configure(name: str, settings: Settings) -> Benchmark:
         )
     if settings.solvers is not None:
         changes["runs"] = _select_runs(bench, settings.solvers)
+    if settings.params:
+        if bench.planner == "paper":
+            raise InputError(f"--param: the {bench.name} benchmark fixes its solvers' options "
+                             "(run its solvers in another benchmark, e.g. 'sets', to change them)")
+        changes["runs"] = with_params(changes.get("runs") or default_runs(bench), settings.params)
     if settings.omegas is not None:
         changes["omegas"] = settings.omegas
     if settings.seeds is not None:
@@ -138,6 +146,49 @@ def configure(name: str, settings: Settings) -> Benchmark:
     if settings.out_dir is not None:
         changes["out_dir"] = str(settings.out_dir)
     return replace(bench, **changes)
+
+
+def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple[Run, ...]:
+    """``runs`` with the solver options ``params`` set where the run's solver takes them (over
+    the run's own value), each named in the label (``lns`` with ``effort=fast``: ``lns
+    effort=fast``); the other runs as they are.
+
+    Raises
+    ------
+    InputError
+        An option that no run's solver takes (the first run's options listed).
+    """
+    from gtsp_bench.registry import check_option_names
+
+    given = dict(params)
+    used: set[str] = set()
+    out = []
+    for r in runs:
+        mine = {}
+        for key, value in given.items():
+            try:
+                check_option_names(r.solver, [key])
+            except InputError:
+                continue
+            mine[key] = value
+        used.update(mine)
+        if not mine:
+            out.append(r)
+            continue
+        label = " ".join([r.name, *(f"{k}={_option_text(v)}" for k, v in mine.items())])
+        options = {**dict(r.options), **mine}
+        out.append(replace(r, options=tuple(sorted(options.items())), label=label))
+    for key in given:
+        if key not in used:
+            solvers = ", ".join(dict.fromkeys(r.solver for r in runs))
+            check_option_names(runs[0].solver, [key])  # the one-line error, options listed
+            raise InputError(f"--param: no solver of this run ({solvers}) takes {key!r}")
+    return tuple(out)
+
+
+def _option_text(value: Any) -> str:
+    """An option's value as ``-p`` takes it (JSON, bare strings without quotes)."""
+    return value if isinstance(value, str) else json.dumps(value)
 
 
 def default_runs(bench: Benchmark) -> tuple[Run, ...]:

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
-from gtsp_bench.checks import arg_float, arg_int
+from gtsp_bench.checks import arg_float, arg_int, arg_key_value
 from gtsp_bench.errors import InputError
 
 DESCRIPTION = """\
@@ -35,6 +35,7 @@ examples:
   gtsp-bench bench exact -K 4..7,10 --omegas 0.5 --time-limit 30
   gtsp-bench bench learned -K 4 --instances 20 --solvers drl,am
   gtsp-bench bench sets --set gtsplib --solvers greedy,lns --time-limit 5 --names 11berlin52,40d198
+  gtsp-bench bench glns --solvers lns -p remove_fraction=0.15 --seeds 1..3 --out /tmp/rf
   gtsp-bench bench scale --set uav-K50-N20-s1 --omegas 0.2,0.8 --seeds 0..4 --out /tmp/k50
 """
 
@@ -54,6 +55,11 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
     g.add_argument("--solvers", "-s", metavar="LIST",
                    help="comma-separated solvers or labels of the benchmark (a prefix picks every "
                         "variant: drl picks 'drl heads=optimal' too), or other registered solvers")
+    g.add_argument("--param", "-p", dest="params", type=arg_key_value, action="append", default=[],
+                   metavar="KEY=VALUE",
+                   help="solver option for every run (repeatable, as solve's -p; over a run's own "
+                        "value, and named in its label: -s lns -p effort=fast gives 'lns "
+                        "effort=fast')")
     g.add_argument("--clusters", "-K", metavar="K",
                    help="cluster counts to keep: a range 4..10, a list 4,7,10 or a mix 4..7,10")
     g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",
@@ -124,7 +130,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str] | None = None) -
         time_limit=check_time_limit(args.time_limit) if args.time_limit is not None else None,
         jobs=args.jobs, executor=args.executor, instance_dir=Path(args.instance_dir),
         progress=not args.no_progress, fresh=args.fresh, retry_failed=args.retry_failed,
-        update_reference=args.update_reference, command=command,
+        update_reference=args.update_reference, command=command, params=tuple(args.params),
     )
 
 

@@ -382,3 +382,21 @@ def test_update_reference_writes_a_better_tour_into_the_sets_reference_csv(tmp_p
     assert refs[("mine-0", 0.5)].value == pytest.approx(rows.loc["mine-0", "objective"], rel=1e-9)
     assert (refs[("mine-0", 0.5)].source, refs[("mine-0", 0.5)].status) == ("greedy 10s seed 0", "best_known")
     assert refs[("mine-1", 0.5)].value == pytest.approx(rows.loc["mine-1", "objective"], rel=1e-9)
+
+
+def test_params_set_options_where_a_solver_takes_them_and_name_them_in_the_label():
+    """-p KEY=VALUE: set on every run whose solver takes it (over the run's own value), named in
+    its label; runs whose solver does not take it unchanged; an option nobody takes refused."""
+    from gtsp_bench.bench.definitions import run
+    from gtsp_bench.bench.engine import with_params
+    from gtsp_bench.errors import InputError
+
+    runs = (run("lns", "lns budget", effort="budget", mirror=False), run("greedy"))
+    lns, greedy = with_params(runs, [("mirror", True), ("remove_fraction", 0.15)])
+    assert lns.name == "lns budget mirror=true remove_fraction=0.15"
+    assert dict(lns.options) == {"effort": "budget", "mirror": True, "remove_fraction": 0.15}
+    assert greedy == runs[1]
+    (named,) = with_params((run("lns"),), [("effort", "fast")])
+    assert named.name == "lns effort=fast" and named.options == (("effort", "fast"),)
+    with pytest.raises(InputError, match="has no option 'nope'"):
+        with_params(runs, [("nope", 1)])

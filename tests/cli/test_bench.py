@@ -21,6 +21,8 @@ from gtsp_bench.cli import build_parser, main
     (["scale", "--solvers", ","], "--solvers: no solver given"),
     (["heuristics", "--executor", "spark"], "bad executor 'spark'"),
     (["learned", "--report-only"], "rows.csv: cannot read the rows"),
+    (["sets", "--solvers", "greedy,lns", "-p", "nope=1"], "solver 'greedy' has no option 'nope'"),
+    (["paper", "-p", "effort=fast"], "--param: the paper benchmark fixes its solvers' options"),
 ])
 def test_bad_options_are_one_line_and_write_nothing(tmp_path, capsys, args, message):
     """A bad value of any option: one error line, exit 2, no output folder."""
