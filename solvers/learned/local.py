@@ -270,7 +270,8 @@ class LocalPolicy(nn.Module):
         tc = self.cand(torch.cat([cand_vec.reshape(r, k, -1), cand_sc], -1))
         tx = self.ctx(torch.cat([ctx_vec.reshape(r, -1), ctx_sc], -1))[:, None]
         # no padding mask while every candidate exists (most steps): a plain softmax is faster
-        pad = None if bool(mask.all()) else torch.cat([mask.new_zeros((r, 1)), ~mask], 1)
+        full = bool(mask.all())
+        pad = None if full else torch.cat([mask.new_zeros((r, 1)), ~mask], 1)
         h = self.encoder(torch.cat([tx, tc], 1), src_key_padding_mask=pad)
         # the score MLP's first layer on [candidate, context] as two products: the context's once
         first, act, last = self.score
@@ -279,7 +280,7 @@ class LocalPolicy(nn.Module):
         ctx_part = torch.addmm(first.bias, h[:, 0], w[:, d:].t())  # (R, dim)
         hidden = act(nn.functional.linear(h[:, 1:], w[:, :d]).add_(ctx_part[:, None]))
         logits = last(hidden).squeeze(-1)
-        return logits.masked_fill(~mask, -math.inf)
+        return logits if full else logits.masked_fill(~mask, -math.inf)
 
     def decode(self, env: EnvBatch, mode: str = "greedy", *, generator: torch.Generator | None = None,
                starts: int = 1, flight_per_m: torch.Tensor | None = None,
@@ -303,7 +304,9 @@ class LocalPolicy(nn.Module):
             if mode == "greedy" and step == walk.n_clusters - 1:  # one cluster left: log p = 0
                 steps.append(walk.move(v, v.mask.int().argmax(-1)))
                 continue
-            logits = self.scores(*turn(v, maps), v.mask)
+            # one start: its frame is the identity, and turning the view would change nothing
+            features = turn(v, maps) if starts > 1 else (v.cand_vec, v.cand_sc, v.ctx_vec, v.ctx_sc)
+            logits = self.scores(*features, v.mask)
             lp = torch.log_softmax(logits, -1)
             if mode == "greedy":
                 choice = logits.argmax(-1)
