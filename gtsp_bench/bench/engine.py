@@ -73,6 +73,14 @@ class Settings:
     #: Solver options (``-p KEY=VALUE``) for every run: added to its options and its label.
     params: tuple[tuple[str, Any], ...] = ()
 
+    def narrowed(self) -> list[str]:
+        """The options that make this run other than its definition (a subset, another
+        budget, other settings): such a run does not refresh the docs' generated tables."""
+        given = {"--solvers": self.solvers, "-K": self.ks, "--set": self.sets, "--names": self.names,
+                 "--instances": self.instances, "--nodes": self.nodes, "--omegas": self.omegas,
+                 "--seeds": self.seeds, "--time-limit": self.time_limit, "-p": self.params or None}
+        return [flag for flag, value in given.items() if value is not None]
+
 
 def _with_instances(src: Any, n: int) -> Any:
     if isinstance(src, (Generated, Committed)):

@@ -256,6 +256,11 @@ def _doc(name: str) -> Output:
         root = committed_root(bench, out_dir)
         if root is None:
             return []
+        narrowed = settings.narrowed() if hasattr(settings, "narrowed") else []
+        if narrowed:  # a part of the benchmark would replace the whole table
+            say(f"note: {page}: its table was not refreshed (a run narrowed by "
+                f"{', '.join(narrowed)}; the whole benchmark refreshes it)")
+            return []
         path = root / page
         if not path.is_file():
             say(f"warning: {path}: no such page; its table was not refreshed")

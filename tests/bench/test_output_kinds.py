@@ -143,3 +143,26 @@ def test_best_known_output_only_for_a_checkouts_results(tmp_path):
     assert written == [tmp_path / "instances" / "gtsplib" / "best_known.csv"]
     assert said == [f"new best known: 11berlin52: 4100 -> 4040 (gtsp-bench lns 1s seed 3), tour in "
                     f"{tmp_path / 'instances' / 'gtsplib' / 'tours'}"]
+
+
+def test_a_narrowed_run_leaves_the_docs_table_alone(tmp_path):
+    """A run narrowed by an option (here --solvers) into results/NAME of a checkout does not
+    rewrite the page's generated table from its part of the rows; the whole run does."""
+    from gtsp_bench.bench.engine import Settings
+
+    bench = BENCHMARKS["exact-scale"]
+    page, block, _ = DOC_BLOCKS["doc-exact-scale"]
+    (tmp_path / "mkdocs.yml").write_text("site_name: x\n")
+    doc = tmp_path / page
+    doc.parent.mkdir(parents=True)
+    old = f"<!-- BEGIN generated:{block} -->\nold\n<!-- END generated:{block} -->\n"
+    doc.write_text(old)
+    out = tmp_path / "results" / bench.name
+    out.mkdir(parents=True)
+    df = _rows(status="optimal", label="milp", solver="milp")
+    said: list[str] = []
+    write = OUTPUTS["doc-exact-scale"]
+    assert write(bench, df, out, Settings(solvers=("milp",)), said.append) == []
+    assert doc.read_text() == old and "narrowed by --solvers" in said[0]
+    assert write(bench, df, out, Settings(), said.append) == [doc]
+    assert "1/1 proven" in doc.read_text()
