@@ -51,6 +51,14 @@ EFFORTS: dict[str, Effort] = {
 }
 
 
+#: Options that may be ``None`` (a default of the effort or of the instance), with their
+#: least value: checked only when given.
+_OPTIONAL_INTS = (("iterations", 1), ("trials", 1), ("patience", 1), ("max_removals", 1),
+                  ("neighbours", 1), ("restart_after", 0), ("reopt_window", 0), ("workers", 1))
+#: Boolean options that may be ``None`` (decided by the effort or the instance).
+_OPTIONAL_BOOLS = ("stop_at_convergence", "points", "quadrants", "mirror")
+
+
 @dataclass(frozen=True)
 class LnsSettings:
     """Validated settings of :class:`Lns` (see there)."""
@@ -87,17 +95,14 @@ class LnsSettings:
     mirror: bool | None = None
 
     def __post_init__(self) -> None:
-        if self.iterations is not None:
-            check_int("iterations", self.iterations, 1)
-        if self.trials is not None:
-            check_int("trials", self.trials, 1)
-        if self.patience is not None:
-            check_int("patience", self.patience, 1)
+        # the options that may be None (the effort's or the instance's default): checked if given
+        for name, low in _OPTIONAL_INTS:
+            if getattr(self, name) is not None:
+                check_int(name, getattr(self, name), low)
+        for name in _OPTIONAL_BOOLS:
+            if getattr(self, name) is not None:
+                check_bool(name, getattr(self, name))
         check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
-        if self.max_removals is not None:
-            check_int("max_removals", self.max_removals, 1)
-        if self.stop_at_convergence is not None:
-            check_bool("stop_at_convergence", self.stop_at_convergence)
         if self.effort is not None:
             check_choice("effort", self.effort, tuple(EFFORTS))
             if self.stop_at_convergence is not None:
@@ -113,18 +118,8 @@ class LnsSettings:
             )
         check_float("reaction", self.reaction, 0.0, 1.0)
         check_float("noise", self.noise, 0.0, math.inf, open_low=False)
-        if self.neighbours is not None:
-            check_int("neighbours", self.neighbours, 1)
-        if self.restart_after is not None:
-            check_int("restart_after", self.restart_after, 0)
-        if self.reopt_window is not None:
-            check_int("reopt_window", self.reopt_window, 0)
         check_bool("fit_to_time", self.fit_to_time)
         check_int("fit_trials", self.fit_trials, 1)
-        if self.points is not None:
-            check_bool("points", self.points)
-        if self.quadrants is not None:
-            check_bool("quadrants", self.quadrants)
         check_bool("macro", self.macro)
         check_int("macro_iterations", self.macro_iterations, 0)
         check_float("macro_groups", self.macro_groups, 0.0, math.inf, open_low=False)
@@ -134,11 +129,7 @@ class LnsSettings:
         check_int("path_clusters", self.path_clusters, 2)
         check_int("path_iterations", self.path_iterations, 0)
         check_int("fail_passes", self.fail_passes, 0)
-        if self.workers is not None:
-            check_int("workers", self.workers, 1)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
-        if self.mirror is not None:
-            check_bool("mirror", self.mirror)
 
     @property
     def preset(self) -> Effort:

@@ -184,6 +184,9 @@ def test_operators_are_all_used():
     ({"starts": 0}, "starts must be an integer >= 1"),
     ({"start_iterations": 0}, "start_iterations must be an integer >= 1"),
     ({"mirror": 1}, "mirror must be true or false"),
+    ({"points": 1}, "points must be true or false"),
+    ({"quadrants": "no"}, "quadrants must be true or false"),
+    ({"workers": 0}, "workers must be an integer >= 1"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
