@@ -213,6 +213,24 @@ def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
     )
 
 
+def glns_targets_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
+    """lns on GLNS's files: its mean gap (over files, of each file's mean over seeds), the files
+    at the best known at least once, the worst run and the runs at the best known."""
+    gaps = df.dropna(subset=["gap_pct"])
+    per_file = gaps.groupby("instance", sort=False)["gap_pct"]
+    worst = gaps.iloc[int(gaps["gap_pct"].to_numpy().argmax())]
+    at_best = gaps["gap_pct"] <= 1e-9
+    return (
+        f"{_made_by(bench, df, command)}\n\n"
+        "| measure | lns |\n|---|---:|\n"
+        f"| mean gap | {per_file.mean().mean():.4f} % |\n"
+        f"| files at the best known at least once | {int((per_file.min() <= 1e-9).sum())} of "
+        f"{per_file.ngroups} |\n"
+        f"| worst run | {worst['gap_pct']:.3f} % ({worst['instance']}) |\n"
+        f"| runs at the best known | {int(at_best.sum())} of {len(gaps)} |"
+    )
+
+
 #: Output name -> (page, block, renderer).
 DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
     "doc-heuristics": ("docs/solvers/heuristics.md", "heuristics-table", heuristics_block),
@@ -220,6 +238,8 @@ DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
     "doc-learned-transfer": ("docs/solvers/learned.md", "learned-transfer-table", transfer_block),
     "doc-exact-scale": ("docs/solvers/exact.md", "exact-scale-table", exact_scale_block),
     "doc-textbook": ("docs/solvers/exact.md", "textbook-table", textbook_block),
+    "doc-glns": ("docs/solvers/heuristics.md", "glns-targets", glns_targets_block),
+    "doc-glns-large": ("docs/solvers/heuristics.md", "glns-large-targets", glns_targets_block),
 }
 
 

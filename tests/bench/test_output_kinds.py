@@ -13,6 +13,7 @@ from gtsp_bench.bench.output_kinds import (
     DOC_BLOCKS,
     OUTPUTS,
     glns_lines,
+    glns_targets_block,
     keep_best_known,
     new_references,
     pivot_markdown,
@@ -166,3 +167,13 @@ def test_a_narrowed_run_leaves_the_docs_table_alone(tmp_path):
     assert doc.read_text() == old and "narrowed by --solvers" in said[0]
     assert write(bench, df, out, Settings(), said.append) == [doc]
     assert "1/1 proven" in doc.read_text()
+
+
+def test_glns_targets_block_counts_files_runs_and_the_worst():
+    """Mean gap = mean over files of each file's mean; a file is hit if one seed is at 0."""
+    df = pd.concat([_rows(instance="a", seed=1, gap_pct=0.0), _rows(instance="a", seed=2, gap_pct=0.4),
+                    _rows(instance="b", seed=1, gap_pct=0.1), _rows(instance="b", seed=2, gap_pct=0.1)])
+    text = glns_targets_block(BENCHMARKS["glns"], df)
+    assert "| mean gap | 0.1500 % |" in text
+    assert "| files at the best known at least once | 1 of 2 |" in text
+    assert "| worst run | 0.400 % (a) |" in text and "| runs at the best known | 1 of 4 |" in text
