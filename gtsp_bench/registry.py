@@ -241,7 +241,8 @@ def get_solver(name: str, **options: Any) -> Solver:
         For an unknown name (listing the valid ones) or an option the solver does not take.
     """
     cls = _solver_class(name)
-    check_option_names(name, options)
+    if options:
+        _check_names(name, option_names(cls), options)
     return cls(**options)
 
 
@@ -252,20 +253,29 @@ def _solver_class(name: str) -> type:
     return registry[name].load()
 
 
+def option_names(solver: str | type) -> tuple[str, ...] | None:
+    """The keyword options a registered solver (by name, or its class) takes, in order; ``None``
+    when it takes any (``**kwargs``)."""
+    cls = _solver_class(solver) if isinstance(solver, str) else solver
+    params = inspect.signature(cls).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return None
+    return tuple(params)
+
+
 def check_option_names(name: str, options: Iterable[str]) -> None:
     """:class:`InputError` (one line, listing the valid ones) when the registered solver ``name``
-    takes none of an option of ``options`` (its keyword names); the values are the solver's to
-    check."""
+    does not take one of ``options`` (keyword names); the values are the solver's to check."""
     given = list(options)
-    if not given:
-        return
-    params = inspect.signature(_solver_class(name)).parameters
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
-        return
-    unknown = [k for k in given if k not in params]
+    if given:
+        _check_names(name, option_names(name), given)
+
+
+def _check_names(name: str, valid: tuple[str, ...] | None, given: Iterable[str]) -> None:
+    unknown = [] if valid is None else [k for k in given if k not in valid]
     if unknown:
-        valid = ", ".join(params) or "none"
-        raise InputError(f"solver {name!r} has no option {unknown[0]!r} (options: {valid})")
+        raise InputError(f"solver {name!r} has no option {unknown[0]!r} "
+                         f"(options: {', '.join(valid or ()) or 'none'})")
 
 
 # ---------------------------------------------------------------------- harness
