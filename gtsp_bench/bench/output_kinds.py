@@ -26,7 +26,7 @@ import datetime as dt
 import math
 import statistics
 from collections.abc import Callable, Iterator
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -213,21 +213,48 @@ def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
     )
 
 
-def glns_targets_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
-    """lns on GLNS's files: its mean gap (over files, of each file's mean over seeds), the files
-    at the best known at least once, the worst run and the runs at the best known."""
+#: A run at most this gap (percent) is at the best known, in the GLNS outputs.
+AT_BEST_PCT = 1e-9
+
+
+@dataclass(frozen=True)
+class GlnsTotals:
+    """lns over GLNS's files: the mean gap (over files, of each file's mean over seeds), files
+    with a run at the best known, the worst run and its file, runs at the best known."""
+
+    mean_gap: float
+    files: int
+    files_hit: int
+    worst: float
+    worst_instance: str
+    runs: int
+    runs_hit: int
+
+
+def glns_totals(df: pd.DataFrame) -> GlnsTotals | None:
+    """The totals of the rows that have a gap (``None``: none has)."""
     gaps = df.dropna(subset=["gap_pct"])
+    if gaps.empty:
+        return None
     per_file = gaps.groupby("instance", sort=False)["gap_pct"]
     worst = gaps.iloc[int(gaps["gap_pct"].to_numpy().argmax())]
-    at_best = gaps["gap_pct"] <= 1e-9
+    return GlnsTotals(float(per_file.mean().mean()), per_file.ngroups,
+                      int((per_file.min() <= AT_BEST_PCT).sum()), float(worst["gap_pct"]),
+                      str(worst["instance"]), len(gaps), int((gaps["gap_pct"] <= AT_BEST_PCT).sum()))
+
+
+def glns_targets_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
+    """lns on GLNS's files (:func:`glns_totals`) as a table of the page."""
+    t = glns_totals(df)
+    if t is None:
+        return f"{_made_by(bench, df, command)}\n\nNo run has a gap."
     return (
         f"{_made_by(bench, df, command)}\n\n"
         "| measure | lns |\n|---|---:|\n"
-        f"| mean gap | {per_file.mean().mean():.4f} % |\n"
-        f"| files at the best known at least once | {int((per_file.min() <= 1e-9).sum())} of "
-        f"{per_file.ngroups} |\n"
-        f"| worst run | {worst['gap_pct']:.3f} % ({worst['instance']}) |\n"
-        f"| runs at the best known | {int(at_best.sum())} of {len(gaps)} |"
+        f"| mean gap | {t.mean_gap:.4f} % |\n"
+        f"| files at the best known at least once | {t.files_hit} of {t.files} |\n"
+        f"| worst run | {t.worst:.3f} % ({t.worst_instance}) |\n"
+        f"| runs at the best known | {t.runs_hit} of {t.runs} |"
     )
 
 
@@ -312,27 +339,24 @@ def glns_lines(df: pd.DataFrame) -> list[str]:
         "| instance | budget s | mean gap % | hits | worst % | GLNS C++ gap % | GLNS hits | GLNS s |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    means, worsts, hit_any = [], [], 0
     for name, g in df.groupby("instance", sort=False):
         gaps = g["gap_pct"].dropna()
         if gaps.empty:
             continue
-        hits = int((gaps <= 1e-9).sum())
-        hit_any += hits > 0
-        means.append(gaps.mean())
-        worsts.append(gaps.max())
+        hits = int((gaps <= AT_BEST_PCT).sum())
         ref = glns.get(name, {})
         lines.append(
             f"| {name} | {g['time_limit'].iloc[0]:.2f} | {gaps.mean():.4f} | {hits}/{len(gaps)} | "
             f"{gaps.max():.3f} | {ref.get('glns_cpp_mean_gap_pct', '-')} | "
             f"{ref.get('glns_cpp_hits10', '-')}/10 | {ref.get('glns_cpp_mean_s', '-')} |"
         )
-    if means:
+    t = glns_totals(df)
+    if t is not None:
         lines += [
             "",
-            f"- mean gap: {sum(means) / len(means):.4f} % over {len(means)} instances",
-            f"- instances at the best known at least once: {hit_any} of {len(means)}",
-            f"- worst run: {max(worsts):.4f} %",
+            f"- mean gap: {t.mean_gap:.4f} % over {t.files} instances",
+            f"- instances at the best known at least once: {t.files_hit} of {t.files}",
+            f"- worst run: {t.worst:.4f} %",
         ]
     return lines
 
@@ -523,6 +547,7 @@ __all__ = [
     "OUTPUTS",
     "gap_time_cell",
     "glns_lines",
+    "glns_totals",
     "keep_best_known",
     "new_references",
     "pivot_markdown",
