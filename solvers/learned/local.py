@@ -162,7 +162,7 @@ class Walk:
         excess = nc.gather(2, j)[..., 0] - self._flat_nc_min[flat]
         excess = (excess / (self.per_m[:, None] * s)).clamp_(0.0, EXCESS_CLIP)
         c_xy = self._flat_cent[flat]  # (R, k, 2)
-        home = (c_xy - self.depot[:, None]).norm(dim=-1) / s
+        home = _sq_norm(c_xy - self.depot[:, None]).sqrt_() / s
         rel = torch.stack([rel_entry, c_xy - self.pos[:, None]], 2)
         cand_vec = rel / s[..., None, None]
         cand_sc = torch.stack([excess, torch.log1p(home)], -1)

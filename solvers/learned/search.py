@@ -21,8 +21,9 @@ One greedy decode is the policy's best guess; a search spends more time for a be
 
 The budget is ``seconds_per_cluster`` * K (default 0.01 s: 1 s at K = 100, 2 s at K = 200), or
 the runner's time limit where smaller; the rounds stop :data:`MARGIN` of it early, so that the
-last local search and the final pricing end within it. The search is seeded (the segments and frames); on a
-loaded machine fewer rounds fit in the budget, so results depend on the machine's speed.
+last local search and the final pricing end within it. The search is seeded (the segments and
+frames); on a loaded machine fewer rounds fit in the budget, so results depend on the machine's
+speed.
 """
 
 from __future__ import annotations
