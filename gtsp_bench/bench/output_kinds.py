@@ -13,11 +13,8 @@ rows alone: ``(benchmark, rows, out_dir, settings, say) -> files written``.
     the sets' ``reference.csv``: new rows for points without one, better tours for ``best_known``
     rows (with ``--update-reference``, or always for the ``references`` benchmark);
 ``best-known``
-    GTSPLIB's ``best_known.csv``: a tour shorter than a file's published best-known value is kept
-    in ``instances/gtsplib/tours/`` and its row points at it
-    (:func:`gtsp_bench.data.gtsplib.keep_tour`), only when the run wrote into the committed folder
-    ``results/NAME`` of a checkout (that checkout's library is updated; also with
-    ``--update-reference``).
+    GTSPLIB's ``best_known.csv``: with ``--update-reference``, a tour shorter than a file's
+    best-known value is kept in the library the run read (:mod:`gtsp_bench.bench.best_known`).
 """
 
 from __future__ import annotations
@@ -32,6 +29,7 @@ from typing import Any
 
 import pandas as pd
 
+from gtsp_bench.bench.best_known import best_known_output
 from gtsp_bench.bench.definitions import Benchmark
 from gtsp_bench.data.io import atomic_write_text
 
@@ -490,54 +488,13 @@ def _update_references(
     return written
 
 
-# ---------------------------------------------------------------------- GTSPLIB's best knowns
-def keep_best_known(df: pd.DataFrame, library: Path, today: str) -> list[tuple[str, float, float, str]]:
-    """Keep each GTSPLIB tour of the rows shorter than its file's best-known value in ``library``
-    (:func:`gtsp_bench.data.gtsplib.keep_tour`; the shortest per file, rows of the library's own
-    file only, by its SHA-256); returns ``(name, old value, new value, source)`` per kept tour."""
-    import hashlib
-
-    from gtsp_bench.checks import strictly_better
-    from gtsp_bench.data import gtsplib
-    from gtsp_bench.data.io import read_text
-
-    table = gtsplib.parse_best_known((library / "best_known.csv").read_text(encoding="utf-8"))
-    ok = df[df["objective"].notna() & df["instance"].isin(list(table)) & (df["order"] != "")]
-    kept = []
-    for name, g in ok.groupby("instance", sort=False):
-        ref = table[str(name)]
-        best = g.iloc[int(g["objective"].to_numpy().argmin())]
-        if ref.proven or not strictly_better(float(best["objective"]), ref.value):
-            continue
-        text = read_text(library / f"{name}.gtsp.gz")
-        if hashlib.sha256(text.encode()).hexdigest() != best["instance_sha256"]:
-            continue  # a file of the same name that is not the library's
-        order, heads = (list(map(int, str(best[c]).split())) for c in ("order", "heads"))
-        source = f"gtsp-bench {best['label']} {best['time_limit']:g}s seed {int(best['seed'])}"
-        row = gtsplib.keep_tour(library, str(name), order, heads, source, today)
-        if row is not None:
-            kept.append((str(name), ref.value, row.value, source))
-    return kept
-
-
-def _best_known(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say: Any) -> list[Path]:
-    root = committed_root(bench, out_dir)
-    if root is None:
-        return []
-    library = root / "instances" / "gtsplib"
-    kept = keep_best_known(df, library, dt.date.today().isoformat())
-    for name, old, new, source in kept:
-        say(f"new best known: {name}: {old:g} -> {new:g} ({source}), tour in {library / 'tours'}")
-    return [library / "best_known.csv"] if kept else []
-
-
 OUTPUTS: dict[str, Output] = {
     "profile": _profile,
     "anytime": _anytime,
     "gap-k": _gap_k,
     "glns": _glns,
     "update-references": _update_references,
-    "best-known": _best_known,
+    "best-known": best_known_output,
     **{name: _doc(name) for name in DOC_BLOCKS},
 }
 
@@ -548,7 +505,6 @@ __all__ = [
     "gap_time_cell",
     "glns_lines",
     "glns_totals",
-    "keep_best_known",
     "new_references",
     "pivot_markdown",
     "proof_cell",

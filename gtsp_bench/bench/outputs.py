@@ -25,6 +25,7 @@ from typing import Any
 
 import pandas as pd
 
+from gtsp_bench.bench.best_known import keep_hint
 from gtsp_bench.bench.definitions import Benchmark, Reference
 from gtsp_bench.bench.rows import (
     BELOW_OPTIMUM,
@@ -205,8 +206,11 @@ def write_all(bench: Benchmark, settings: Any, p: Any, outcome: Any, say: Callab
     outcome.errors += errors_of(df)
     for e in outcome.errors:
         say(f"error: {e}")
-    for r in df[df["note"].str.contains(BETTER_THAN_BEST_KNOWN, regex=False)].itertuples():
+    better = df[df["note"].str.contains(BETTER_THAN_BEST_KNOWN, regex=False)]
+    for r in better.itertuples():
         say(f"{BETTER_THAN_BEST_KNOWN}: {r.set}/{r.instance}: {r.label} seed {r.seed} found {r.objective!r}")
+    if not better.empty and not getattr(settings, "update_reference", False):
+        say(keep_hint(better, getattr(settings, "command", "")))
     written += render(bench, df, out_dir, settings, say)
     outcome.written = written
     outcome.answer = text

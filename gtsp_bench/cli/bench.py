@@ -88,9 +88,9 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                    "(failures whose worker died or ran out of memory are always retried)")
     g.add_argument("--update-reference", action="store_true",
                    help="write tours better than a set's best_known value (and values for points "
-                        "without one) into its reference.csv, and GTSPLIB tours shorter than "
-                        "best_known.csv's into the library (only when OUT is the checkout's "
-                        "results/NAME); a proven optimum is never changed")
+                        "without one) into its reference.csv, and keep GTSPLIB tours shorter than "
+                        "best_known.csv's in the library the run read (tours/NAME.LENGTH.tour.gz; "
+                        "any OUT); a proven optimum is never changed")
     g.add_argument("--report-only", action="store_true",
                    help="solve nothing: redraw OUT's summary, tables and figures from OUT/rows.csv")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")

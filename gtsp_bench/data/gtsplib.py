@@ -41,7 +41,7 @@ _REPO_FOLDER = Path(__file__).resolve().parents[2] / "instances" / "gtsplib"
 _COLUMNS = ("name", "clusters", "nodes", "best_known", "status", "type", "edge_weight_type",
             "edge_weight_format", "tour")
 #: Columns a table may leave out (older copies of the library): empty when absent.
-_OPTIONAL = ("source", "date", "certificate")
+_OPTIONAL = ("source", "date", "certificate", "published")
 
 
 @dataclass(frozen=True)
@@ -75,6 +75,11 @@ class Reference:
     certificate
         A proof certificate of optimality (``gtsp-bench check-proof`` checks it), relative to the
         library folder; empty where none is shipped.
+    published
+        The value the library was distributed with (GLKH's tour length, the value GLNS and GLKH's
+        papers compare against); :attr:`value` is lower where a shorter tour was kept since, and
+        the tour of the published value stays as ``tours/NAME.PUBLISHED.tour.gz``. ``None`` in
+        an older copy of the table without the column.
     """
 
     name: str
@@ -89,6 +94,7 @@ class Reference:
     source: str = ""
     date: str = ""
     certificate: str = ""
+    published: float | None = None
 
     @property
     def proven(self) -> bool:
@@ -117,12 +123,17 @@ def parse_best_known(text: str) -> dict[str, Reference]:
     out: dict[str, Reference] = {}
     for line, row in enumerate(reader, start=2):
         try:
+            published = row.get("published") or None
             ref = Reference(row["name"], int(row["clusters"]), int(row["nodes"]),
                             float(row["best_known"]), row["status"], row["type"],
                             row["edge_weight_type"], row["edge_weight_format"], row["tour"],
-                            *((row.get(c) or "") for c in _OPTIONAL))
+                            *((row.get(c) or "") for c in _OPTIONAL[:-1]),
+                            None if published is None else float(published))
         except (TypeError, ValueError):
             raise InputError(f"line {line}: bad row {row!r}") from None
+        if ref.published is not None and not ref.value <= ref.published:
+            raise InputError(f"line {line}: {ref.name}'s best_known {row['best_known']} is above its "
+                             f"published value {row['published']}")
         if ref.status not in STATUSES:
             raise InputError(f"line {line}: status {ref.status!r} is not one of {', '.join(STATUSES)}")
         if ref.name in out:
@@ -138,10 +149,15 @@ def format_best_known(references: Iterable[Reference]) -> str:
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow((*_COLUMNS, *_OPTIONAL))
     for r in references:
-        value = int(r.value) if float(r.value).is_integer() else r.value
-        writer.writerow((r.name, r.clusters, r.nodes, value, r.status, r.type, r.edge_weight_type,
-                         r.edge_weight_format, r.tour, r.source, r.date, r.certificate))
+        writer.writerow((r.name, r.clusters, r.nodes, _number(r.value), r.status, r.type,
+                         r.edge_weight_type, r.edge_weight_format, r.tour, r.source, r.date,
+                         r.certificate, "" if r.published is None else _number(r.published)))
     return out.getvalue()
+
+
+def _number(value: float) -> float | int:
+    """``value`` as written in the table: integral values without a decimal point."""
+    return int(value) if float(value).is_integer() else value
 
 
 def folder() -> Path:
@@ -219,34 +235,49 @@ def keep_tour(where: Path, name: str, order: Sequence[int], heads: Sequence[int]
               date: str) -> Reference | None:
     """Keep a tour of ``name`` that is shorter than its ``best_known`` value: write it to
     ``where/tours/NAME.LENGTH.tour.gz`` and point its row of ``where/best_known.csv`` at it (the
-    value, tour, ``source`` and ``date``; the status and certificate unchanged), both atomically.
+    value, tour, ``source`` and ``date``; the status, certificate and published value unchanged,
+    the latter filled with the old value where the table had none), both atomically.
 
     The tour is priced here by the evaluator on the library's file, whatever its finder claimed.
-    The earlier tour file stays (git keeps who found what). Returns the new row, or ``None`` when
-    the tour is not shorter (or the row is a proven optimum that it meets).
+    The earlier tour file stays (``published`` names GLKH's; git keeps who found what). Returns
+    the new row, or ``None`` when the tour is not shorter.
 
     Raises
     ------
     InputError
-        An unknown name, an infeasible tour, or one shorter than a proven optimum (the solver or
-        the table is wrong).
+        ``FILE: problem``: an unreadable table, an unknown name, an infeasible tour, or one
+        shorter than a proven optimum (the solver or the table is wrong).
     """
     table_path = where / "best_known.csv"
-    table = parse_best_known(table_path.read_text(encoding="utf-8"))
+    try:
+        table = parse_best_known(table_path.read_text(encoding="utf-8"))
+    except InputError as e:
+        raise InputError(f"{table_path}: {e}") from None
+    except OSError as e:
+        raise InputError(f"{table_path}: cannot read it ({e.strerror or e})") from None
     if name not in table:
         raise InputError(f"{table_path}: no instance {name!r}")
     ref = table[name]
-    inst = read_instance(where / f"{name}.gtsp.gz")
-    length = evaluate(inst, None, order, heads).objective
+    file = where / f"{name}.gtsp.gz"
+    inst = read_instance(file)
+    try:
+        length = evaluate(inst, None, order, heads).objective
+    except InputError as e:
+        raise InputError(f"{file}: the tour to keep is not one: {e}") from None
     if not strictly_better(length, ref.value):
         return None
     if ref.proven:
-        raise InputError(f"{name}: a tour of length {length!r} lies below the proven optimum "
-                         f"{ref.value!r}; the solver or the table is wrong")
-    value = int(length) if float(length).is_integer() else length
+        raise InputError(f"{table_path}: {name}: a tour of length {length!r} lies below the proven "
+                         f"optimum {ref.value!r}; the solver or the table is wrong")
+    value = _number(length)
     tour = f"tours/{name}.{value}.tour.gz"
     write_tour(inst, where / tour, order, heads, [f"Length = {value}", f"Found by {source} {date}"])
-    table[name] = replace(ref, value=float(length), tour=tour, source=source, date=date)
-    atomic_write_text(table_path, format_best_known(table.values()))
+    published = ref.value if ref.published is None else ref.published
+    table[name] = replace(ref, value=float(length), tour=tour, source=source, date=date,
+                          published=published)
+    try:
+        atomic_write_text(table_path, format_best_known(table.values()))
+    except OSError as e:
+        raise InputError(f"{table_path}: cannot write it ({e.strerror or e})") from None
     _best_known.cache_clear()
     return table[name]

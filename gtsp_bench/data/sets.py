@@ -20,8 +20,10 @@ strictly (one-line errors naming the line), :func:`read_reference` and :func:`wr
 do the file I/O, the latter atomically.
 
 GTSPLIB keeps one source of truth: its set's references are read from the library's own
-``best_known.csv`` (GLKH's tour lengths, with the same ``optimal`` / ``best_known`` status), which
-also names a tour file per value; no ``reference.csv`` is written for it.
+``best_known.csv`` (GLKH's tour lengths, or a shorter tour's kept since, with the same
+``optimal`` / ``best_known`` status, source and date), which also names a tour file per value; no
+``reference.csv`` is written for it (``--update-reference`` keeps a GTSPLIB tour there:
+:mod:`gtsp_bench.bench.best_known`).
 """
 
 from __future__ import annotations
@@ -245,8 +247,8 @@ def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
     files, refs = [], {}
     for r in table.values():  # AGTSP files too: symmetric-only solvers refuse them
         files.append(SetFile(where / f"{r.name}.gtsp.gz", r.name, r.clusters, r.nodes))
-        source = "Fischetti et al. 1997; GLKH tour" if r.proven else "GLKH"
-        refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, source, "")
+        source = "Fischetti et al. 1997; GLKH tour" if r.proven else r.source or "GLKH"
+        refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, source, r.date)
     return InstanceSet(name, where, tuple(files), refs, None)
 
 

@@ -400,3 +400,43 @@ def test_params_set_options_where_a_solver_takes_them_and_name_them_in_the_label
     assert named.name == "lns effort=fast" and named.options == (("effort", "fast"),)
     with pytest.raises(InputError, match="has no option 'nope'"):
         with_params(runs, [("nope", 1)])
+
+
+def test_a_gtsplib_tour_below_the_best_known_is_kept_only_with_update_reference(tmp_path, capsys):
+    """A GTSPLIB copy whose best_known value greedy beats: the run says how many solves went below
+    and how to keep them, and writes nothing there; with --update-reference (the solve re-used)
+    the tour is kept in that copy, priced to the row's new value, its published value kept; a
+    row proven optimal that a tour undercuts is one error line and exit code 2."""
+    from dataclasses import replace
+
+    from gtsp_bench.data import gtsplib
+    from gtsp_bench.data.io import read_instance, read_tour
+    from gtsp_bench.energy import evaluate
+    from tests.conftest import GTSPLIB
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
+    ref = replace(gtsplib.best_known()["11berlin52"], status="best_known", value=10**6, published=10**6)
+    (lib / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
+    argv = ["bench", "sets", "--set", str(lib), "--solvers", "greedy", "--jobs", "1",
+            "--out", str(tmp_path / "out"), "--no-progress"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "better than the best known: lib/11berlin52: greedy seed 0" in err
+    assert "1 solve(s) of 1 file(s) went below the best-known value; `gtsp-bench bench sets" in err
+    assert not (lib / "tours").exists()
+    assert main([*argv, "--update-reference"]) == 0
+    err = capsys.readouterr().err
+    assert "0 solves run, 1 re-used" in err and "new best known: 11berlin52: 1e+06 -> " in err
+    row = gtsplib.parse_best_known((lib / "best_known.csv").read_text())["11berlin52"]
+    assert (row.status, row.published, row.source) == ("best_known", 10**6, "gtsp-bench greedy 10s seed 0")
+    inst = read_instance(lib / "11berlin52.gtsp.gz")
+    assert evaluate(inst, None, *read_tour(lib / row.tour, inst)).objective == row.value
+    (lib / "best_known.csv").write_text(gtsplib.format_best_known([replace(row, status="optimal",
+                                                                           value=row.value + 1)]))
+    assert main([*argv, "--update-reference"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1].startswith(f"gtsp-bench: error: {lib / 'best_known.csv'}: 11berlin52: a tour of length ")
+    assert "below the proven optimum" in err[-1]
+    assert [p.name for p in (lib / "tours").iterdir()] == [row.tour.removeprefix("tours/")]

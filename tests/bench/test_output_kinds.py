@@ -1,9 +1,8 @@
-"""The output kinds a definition names: GLNS's table, the doc blocks, the sets' reference.csv
-and GTSPLIB's best-known tours, each from the rows."""
+"""The output kinds a definition names: GLNS's table, the doc blocks and the sets'
+reference.csv, each from the rows (GTSPLIB's best-known tours: test_best_known.py)."""
 
 from __future__ import annotations
 
-import hashlib
 import math
 
 import pandas as pd
@@ -14,7 +13,6 @@ from gtsp_bench.bench.output_kinds import (
     OUTPUTS,
     glns_lines,
     glns_targets_block,
-    keep_best_known,
     new_references,
     pivot_markdown,
     proof_cell,
@@ -95,55 +93,6 @@ def test_committed_doc_blocks_are_what_their_rows_give():
         text = (REPO / page).read_text()
         want = renderer(bench, read_rows(rows), run_command(rows.parent))
         assert f"<!-- BEGIN generated:{block} -->\n{want}\n<!-- END generated:{block} -->" in text, name
-
-
-def _gtsplib_rows(tmp_path, value: int) -> tuple[pd.DataFrame, object]:
-    """A copy of the library with 11berlin52 as a best_known row of ``value``, and two rows: GLKH's
-    tour (4040) and a longer one, each of the library's file."""
-    from dataclasses import replace
-
-    from gtsp_bench.data import gtsplib
-    from gtsp_bench.data.io import read_text
-    from tests.conftest import GTSPLIB
-
-    ref = replace(gtsplib.best_known()["11berlin52"], status="best_known", value=value)
-    (tmp_path / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
-    (tmp_path / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
-    sha = hashlib.sha256(read_text(tmp_path / "11berlin52.gtsp.gz").encode()).hexdigest()
-    order, heads = gtsplib.best_tour("11berlin52")
-    text = {"order": " ".join(map(str, order)), "heads": " ".join(map(str, heads))}
-    df = pd.concat([_rows(instance="11berlin52", instance_sha256=sha, objective=4040.0, seed=3, **text),
-                    _rows(instance="11berlin52", instance_sha256=sha, objective=4100.0, seed=4,
-                          order=" ".join(map(str, range(11))), heads=" ".join(["0"] * 11))])
-    return df, gtsplib
-
-
-def test_best_known_keeps_the_shortest_tour_below_the_library_value(tmp_path):
-    """The shortest tour below the row's value is kept with the run's label, budget and seed as
-    its source; rows of another file of the same name, or not below the value, change nothing."""
-    df, gtsplib = _gtsplib_rows(tmp_path, 4100)
-    assert keep_best_known(df.assign(instance_sha256="0" * 64), tmp_path, "2026-11-27") == []
-    assert keep_best_known(df, tmp_path, "2026-11-27") == [
-        ("11berlin52", 4100.0, 4040.0, "gtsp-bench lns 1s seed 3")]
-    row = gtsplib.parse_best_known((tmp_path / "best_known.csv").read_text())["11berlin52"]
-    assert (row.value, row.tour, row.date) == (4040.0, "tours/11berlin52.4040.tour.gz", "2026-11-27")
-    assert keep_best_known(df, tmp_path, "2026-11-28") == []
-
-
-def test_best_known_output_only_for_a_checkouts_results(tmp_path):
-    """The output touches a library only when the run wrote into a checkout's results/NAME (the
-    library beside it); anywhere else it writes nothing."""
-    (tmp_path / "instances" / "gtsplib").mkdir(parents=True)
-    df, _ = _gtsplib_rows(tmp_path / "instances" / "gtsplib", 4100)
-    bench = BENCHMARKS["glns"]
-    said: list[str] = []
-    assert OUTPUTS["best-known"](bench, df, tmp_path / "elsewhere", None, said.append) == []
-    assert not (tmp_path / "instances" / "gtsplib" / "tours").exists()
-    (tmp_path / "mkdocs.yml").write_text("site_name: x\n")
-    written = OUTPUTS["best-known"](bench, df, tmp_path / "results" / "glns", None, said.append)
-    assert written == [tmp_path / "instances" / "gtsplib" / "best_known.csv"]
-    assert said == [f"new best known: 11berlin52: 4100 -> 4040 (gtsp-bench lns 1s seed 3), tour in "
-                    f"{tmp_path / 'instances' / 'gtsplib' / 'tours'}"]
 
 
 def test_a_narrowed_run_leaves_the_docs_table_alone(tmp_path):

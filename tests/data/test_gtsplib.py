@@ -54,6 +54,31 @@ def test_the_library_is_complete():
         assert float(length) > by_name[name], t
 
 
+def test_published_values_stay_findable():
+    """Every row has its published (GLKH's) value: the row's own where GLKH's tour is the best
+    known, else above it, with GLKH's tour file still in tours/ under that length."""
+    for r in ROWS:
+        if r["source"] == "GLKH":
+            assert r["published"] == r["best_known"], r["name"]
+        else:
+            assert float(r["published"]) > float(r["best_known"]), r["name"]
+            assert (GTSPLIB / "tours" / f"{r['name']}.{r['published']}.tour.gz").is_file(), r["name"]
+
+
+_SUPERSEDED = sorted(
+    p.name for p in (GTSPLIB / "tours").iterdir() if f"tours/{p.name}" not in {r["tour"] for r in ROWS}
+)
+
+
+@pytest.mark.parametrize("file", _SUPERSEDED or [pytest.param("", marks=pytest.mark.skip("none kept yet"))])
+def test_superseded_tours_price_to_the_length_they_are_named_for(file):
+    """A tour a shorter one superseded (GLKH's published one, or an earlier kept one) still prices
+    to the LENGTH of its name NAME.LENGTH.tour.gz: every value the table ever held has its tour."""
+    name, length = file.removesuffix(".tour.gz").rsplit(".", 1)
+    inst = read_instance(GTSPLIB / f"{name}.gtsp.gz")
+    assert evaluate(inst, None, *read_tour(GTSPLIB / "tours" / file, inst)).objective == float(length)
+
+
 def test_reference_columns_say_who_found_each_tour():
     """Each row names its tour's finder: GLKH (the distributed tours, no date) or a run of this
     project (a best_known row with its ISO date); a certificate, where given, is a file."""
@@ -126,7 +151,8 @@ def test_reference_status():
 
 def test_glns_table_agrees_with_best_known():
     """glns-45.csv's instances and sizes are those of best_known.csv, and its (published)
-    best-known values too, except where a shorter tour was kept since."""
+    best-known values are the published column; the best_known column is lower only where a
+    shorter tour was kept since."""
     refs = gtsplib.best_known()
     with (GTSPLIB / "glns-45.csv").open() as f:
         rows = list(csv.DictReader(f))
@@ -134,15 +160,14 @@ def test_glns_table_agrees_with_best_known():
     for r in rows:
         ref = refs[r["instance"]]
         assert (ref.nodes, ref.clusters) == (int(r["vertices"]), int(r["sets"]))
-        if ref.source == "GLKH":
-            assert ref.value == float(r["best_known"])
-        else:
-            assert ref.value < float(r["best_known"])
+        assert ref.published == float(r["best_known"])
+        assert ref.value == ref.published if ref.source == "GLKH" else ref.value < ref.published
 
 
 def _library(tmp_path, status: str, value: int):
     """A copy of the library holding 11berlin52 only, its row given ``status`` and ``value``."""
-    ref = replace(gtsplib.best_known()["11berlin52"], status=status, value=value, certificate="c.txt")
+    ref = replace(gtsplib.best_known()["11berlin52"], status=status, value=value, certificate="c.txt",
+                  published=value)
     (tmp_path / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
     (tmp_path / "11berlin52.gtsp.gz").write_bytes((GTSPLIB / "11berlin52.gtsp.gz").read_bytes())
     return tmp_path
@@ -158,8 +183,8 @@ def test_keep_tour_writes_a_shorter_tour_and_points_its_row_at_it(tmp_path):
     assert row is not None and (row.value, row.tour) == (4040, "tours/11berlin52.4040.tour.gz")
     table = gtsplib.parse_best_known((where / "best_known.csv").read_text())
     assert table["11berlin52"] == row
-    assert (row.status, row.source, row.date, row.certificate) == (
-        "best_known", "gtsp-bench lns 1s seed 3", "2026-11-27", "c.txt")
+    assert (row.status, row.source, row.date, row.certificate, row.published) == (
+        "best_known", "gtsp-bench lns 1s seed 3", "2026-11-27", "c.txt", 4100)
     inst = read_instance(where / "11berlin52.gtsp.gz")
     assert evaluate(inst, None, *read_tour(where / row.tour, inst)).objective == 4040
     before = (where / "best_known.csv").read_text()
@@ -168,10 +193,39 @@ def test_keep_tour_writes_a_shorter_tour_and_points_its_row_at_it(tmp_path):
 
 
 def test_keep_tour_refuses_a_tour_below_a_proven_optimum(tmp_path):
-    """Below an ``optimal`` row the solver or the table is wrong: an error, nothing written."""
+    """Below an ``optimal`` row the solver or the table is wrong: an error naming the table,
+    nothing written."""
     where = _library(tmp_path, "optimal", 4100)
     order, heads = gtsplib.best_tour("11berlin52")
-    with pytest.raises(InputError, match="below the proven optimum 4100"):
+    with pytest.raises(InputError, match=r"best_known.csv: 11berlin52: .* below the proven optimum 4100"):
+        gtsplib.keep_tour(where, "11berlin52", order, heads, "x", "2026-11-27")
+    assert not (where / "tours").exists()
+
+
+def test_keep_tour_fills_the_published_value_of_an_older_table(tmp_path):
+    """A table without the published column gets the superseded value there."""
+    where = _library(tmp_path, "best_known", 4100)
+    ref = replace(gtsplib.parse_best_known((where / "best_known.csv").read_text())["11berlin52"],
+                  published=None)
+    (where / "best_known.csv").write_text(gtsplib.format_best_known([ref]))
+    row = gtsplib.keep_tour(where, "11berlin52", *gtsplib.best_tour("11berlin52"), "x", "2026-11-27")
+    assert row is not None and (row.value, row.published) == (4040, 4100)
+
+
+@pytest.mark.parametrize(
+    ("table", "tour", "message"),
+    [
+        ("name,clusters\nx,1\n", None, r"best_known.csv: missing column 'nodes'"),
+        (None, ([0] * 11, [0] * 11), r"11berlin52.gtsp.gz: the tour to keep is not one: "),
+    ],
+)
+def test_keep_tour_errors_name_the_file(tmp_path, table, tour, message):
+    """A bad table or an infeasible tour is one InputError naming the file; nothing is written."""
+    where = _library(tmp_path, "best_known", 4100)
+    if table is not None:
+        (where / "best_known.csv").write_text(table)
+    order, heads = tour or gtsplib.best_tour("11berlin52")
+    with pytest.raises(InputError, match=message):
         gtsplib.keep_tour(where, "11berlin52", order, heads, "x", "2026-11-27")
     assert not (where / "tours").exists()
 
@@ -222,6 +276,10 @@ def test_the_folder_can_be_moved(tmp_path, monkeypatch):
          "x,1,2,3,proven,GTSP,EUC_2D,,t\n", "status 'proven' is not one of optimal, best_known"),
         ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
          "x,1,2,3,optimal,GTSP,EUC_2D,,t\nx,1,2,3,optimal,GTSP,EUC_2D,,t\n", "line 3: x is listed twice"),
+        ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour,published\n"
+         "x,1,2,3,best_known,GTSP,EUC_2D,,t,2\n", "line 2: x's best_known 3 is above its published value 2"),
+        ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour,published\n"
+         "x,1,2,3,best_known,GTSP,EUC_2D,,t,abc\n", "line 2: bad row"),
     ],
 )
 def test_bad_reference_tables(text, message):
@@ -239,11 +297,11 @@ def test_reference_table_round_trips():
 
 
 def test_optional_reference_columns_default_to_empty():
-    """A table without source, date and certificate columns reads them as empty."""
+    """A table without source, date, certificate and published columns reads them as empty."""
     text = ("name,clusters,nodes,best_known,status,type,edge_weight_type,edge_weight_format,tour\n"
             "x,1,2,3.5,optimal,GTSP,EUC_2D,,t\n")
     ref = gtsplib.parse_best_known(text)["x"]
-    assert (ref.value, ref.source, ref.date, ref.certificate) == (3.5, "", "", "")
+    assert (ref.value, ref.source, ref.date, ref.certificate, ref.published) == (3.5, "", "", "", None)
     assert gtsplib.parse_best_known(gtsplib.format_best_known([ref]))["x"] == ref
 
 
