@@ -31,6 +31,7 @@ import pandas as pd
 
 from gtsp_bench.bench.best_known import best_known_output
 from gtsp_bench.bench.definitions import Benchmark
+from gtsp_bench.bench.rows import HIT_GAP_PCT
 from gtsp_bench.data.io import atomic_write_text
 
 Output = Callable[[Benchmark, pd.DataFrame, Path, Any, Callable[[str], None]], list[Path]]
@@ -211,10 +212,6 @@ def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
     )
 
 
-#: A run at most this gap (percent) is at the best known, in the GLNS outputs.
-AT_BEST_PCT = 1e-9
-
-
 @dataclass(frozen=True)
 class GlnsTotals:
     """lns over GLNS's files: the mean gap (over files, of each file's mean over seeds), files
@@ -237,8 +234,8 @@ def glns_totals(df: pd.DataFrame) -> GlnsTotals | None:
     per_file = gaps.groupby("instance", sort=False)["gap_pct"]
     worst = gaps.iloc[int(gaps["gap_pct"].to_numpy().argmax())]
     return GlnsTotals(float(per_file.mean().mean()), per_file.ngroups,
-                      int((per_file.min() <= AT_BEST_PCT).sum()), float(worst["gap_pct"]),
-                      str(worst["instance"]), len(gaps), int((gaps["gap_pct"] <= AT_BEST_PCT).sum()))
+                      int((per_file.min() <= HIT_GAP_PCT).sum()), float(worst["gap_pct"]),
+                      str(worst["instance"]), len(gaps), int((gaps["gap_pct"] <= HIT_GAP_PCT).sum()))
 
 
 def glns_targets_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
@@ -341,7 +338,7 @@ def glns_lines(df: pd.DataFrame) -> list[str]:
         gaps = g["gap_pct"].dropna()
         if gaps.empty:
             continue
-        hits = int((gaps <= AT_BEST_PCT).sum())
+        hits = int((gaps <= HIT_GAP_PCT).sum())
         ref = glns.get(name, {})
         lines.append(
             f"| {name} | {g['time_limit'].iloc[0]:.2f} | {gaps.mean():.4f} | {hits}/{len(gaps)} | "
