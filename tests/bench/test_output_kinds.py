@@ -126,3 +126,37 @@ def test_glns_targets_block_counts_files_runs_and_the_worst():
     assert "| mean gap | 0.1500 % |" in text
     assert "| files at the best known at least once | 1 of 2 |" in text
     assert "| worst run | 0.400 % (a) |" in text and "| runs at the best known | 1 of 4 |" in text
+
+
+def test_update_reference_keeps_the_omegas_a_set_holds(tmp_path):
+    """--update-reference from a benchmark other than references does not add points at omegas
+    the set's reference.csv does not hold (it says so); a better tour at a held omega is kept."""
+    from types import SimpleNamespace
+
+    from gtsp_bench.data.io import write_instance
+    from gtsp_bench.data.sets import read_reference
+    from gtsp_bench.generator import generate_instance
+    from gtsp_bench.registry import get_solver, run_solver
+
+    folder = tmp_path / "mine"
+    inst = generate_instance(3, 4, seed=0, name="i1")
+    write_instance(inst, folder / "i1.json")
+    r5, r9 = (run_solver(get_solver("dp"), inst, w) for w in (0.5, 0.9))
+    (folder / "reference.csv").write_text(
+        "instance,omega,value,lower_bound,status,source,date\n"
+        f"i1,0.5,{r5.objective + 10},,best_known,lns 10s seed 1,2026-01-01\n")
+
+    def tour(r):
+        return {"order": " ".join(map(str, r.order)), "heads": " ".join(map(str, r.heads))}
+
+    df = pd.concat([_rows(set="mine", omega=0.5, objective=r5.objective, **tour(r5)),
+                    _rows(set="mine", omega=0.9, objective=r9.objective, **tour(r9))])
+    said: list[str] = []
+    settings = SimpleNamespace(update_reference=True, sets=(str(folder),), instance_dir=str(tmp_path))
+    OUTPUTS["update-references"](BENCHMARKS["exact-frontier-uav"], df, tmp_path, settings, said.append)
+    ref = read_reference(folder / "reference.csv")
+    assert set(ref) == {("i1", 0.5)} and math.isclose(ref[("i1", 0.5)].value, r5.objective)
+    assert any("not updated at omega 0.9" in m for m in said), said
+    # the references benchmark fills a set's grid: it adds the point
+    OUTPUTS["update-references"](BENCHMARKS["references"], df, tmp_path, settings, said.append)
+    assert set(read_reference(folder / "reference.csv")) == {("i1", 0.5), ("i1", 0.9)}
