@@ -164,20 +164,42 @@ class Cuts:
     def dual_weights(
         self, model: GtspModel, duals: np.ndarray, edges: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """For row duals ``duals``: the dual weight on each of ``edges`` and on each y column."""
+        """For row duals ``duals``: the dual weight on each of ``edges`` and on each y column.
+
+        With many edges, each side is split into the clusters it holds whole (``W``) and its
+        other nodes (``P``, a few at most in most cuts). The weight of edge ``(i, j)``, ``sum_k
+        d_k s_k[i] s_k[j]`` less half the crossing sides' duals at ``i`` and at ``j``, is then a
+        clusters x clusters product (``W W``), a nodes x clusters one (``W P``, the halves
+        added) and a sparse one over the few node pairs in a ``P`` (``P P``), summed per edge by
+        :func:`~gtsp_bench.solvers.exact.mip.flow.edge_weights`. At UAV K = 200 (3,663 nodes,
+        2,756 sides with a dual, 6,135 of their nodes outside whole clusters) the dense ``(n,
+        n)`` product over nodes took 2.8 s a call, this 0.4 s.
+        """
         nz = np.flatnonzero(np.abs(duals[self.row]) > 1e-12)
         rows = np.flatnonzero(np.abs(duals) > 1e-12)
         on_y = duals[rows] @ self.ycoef[rows]
         d = duals[self.row[nz]]
         if len(edges) * len(nz) < model.n_nodes**2 * 4:  # few edges: side by side
             return d @ self._edge_coef(nz, model.tail[edges], model.head[edges]), on_y
-        # (n, n): duals of the sides holding i and j; a crossing side's -1/2 (s_i + s_j) + s_i s_j
-        sf = self.side[nz].astype(float)
-        pair = (sf * d[:, None]).T @ sf
+        sides, cl = self.side[nz], model.cluster
+        starts = np.flatnonzero(np.r_[True, cl[1:] != cl[:-1]])
+        whole = np.logical_and.reduceat(sides, starts, axis=1)  # (sides, clusters)
+        part = sp.csr_array(sides & ~whole[:, cl])  # (sides, nodes)
+        wd = whole * d[:, None]
+        pair = wd.T @ whole.astype(float)  # W W
+        node_cluster = np.ascontiguousarray(part.T @ wd) if part.nnz else np.zeros((len(cl), len(starts)))
         cross = self.cross[nz]
-        half = -0.5 * (d[cross] @ sf[cross]) if cross.any() else np.zeros(model.n_nodes)
-        t, h = model.tail[edges], model.head[edges]
-        return pair[t, h] + half[t] + half[h], on_y
+        if cross.any():  # the crossing sides' -1/2 at each end: one end's at each (node, cluster)
+            node_cluster += (-0.5 * (d[cross] @ sides[cross]))[:, None]
+        extra = np.zeros(0)
+        pp = sp.coo_array(part.T @ sp.csr_array(part.multiply(d[:, None])))  # P P
+        a, b = pp.coords
+        on = (a < b) & (cl[a] != cl[b])
+        if on.any():
+            extra = np.zeros(len(model.tail))
+            np.add.at(extra, model.edge_ids(a[on], b[on]), pp.data[on])
+        return flow.edge_weights(np.asarray(edges, dtype=np.int64), model.tail, model.head, cl,
+                                 pair, node_cluster, extra), on_y
 
 
 def subtour_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
