@@ -249,9 +249,10 @@ def node_cluster_cuts(model: GtspModel, values: np.ndarray) -> Cuts | None:
     """
     y, x = model.split(values)
     n, m = model.n_nodes, model.n_clusters
-    ends = np.concatenate([model.tail, model.head])
-    key = ends * m + np.concatenate([model.cluster[model.head], model.cluster[model.tail]])
-    load = np.bincount(key, weights=np.concatenate([x, x]), minlength=n * m)
+    sup = np.flatnonzero(x)  # (over every edge this took 0.6 s a call at UAV K = 200)
+    t, h = model.tail[sup], model.head[sup]
+    key = np.concatenate([t, h]) * m + np.concatenate([model.cluster[h], model.cluster[t]])
+    load = np.bincount(key, weights=np.concatenate([x[sup], x[sup]]), minlength=n * m)
     viol = np.flatnonzero(load - np.repeat(y, m) > TOL)
     if len(viol) == 0:
         return None
