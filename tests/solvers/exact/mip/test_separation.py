@@ -174,11 +174,13 @@ def _random_family(model: GtspModel, rng: np.random.Generator) -> Cuts:
     return cuts.sparsest(model, np.arange(model.n_cols))  # some sides crossing
 
 
-def test_dual_weights_by_whole_clusters_equal_the_dense_product():
+def test_dual_weights_by_whole_clusters_equal_the_dense_product(monkeypatch):
     """On random cut families (sides of whole clusters, sides that split clusters, crossing sides,
     several sides a row, zero duals among them), the edge weights computed from the clusters each
-    side holds whole and its other nodes equal the dense node-pair product and the duals times
-    the cut matrix, over every edge and over a subset in another order."""
+    side holds whole and its other nodes (the form above ``DENSE_NODES`` nodes, here forced)
+    equal the dense node-pair product and the duals times the cut matrix, over every edge and
+    over a subset in another order."""
+    monkeypatch.setattr(separation, "DENSE_NODES", 0)
     crossed = split = 0
     for seed in range(6):
         rng = np.random.default_rng(seed)
