@@ -173,10 +173,10 @@ class Cuts:
 
         With many edges (and more than :data:`DENSE_NODES` nodes), each side is split into the
         clusters it holds whole (``W``) and its other nodes (``P``, a few at most in most cuts).
-        The weight of edge ``(i, j)``, ``sum_k
-        d_k s_k[i] s_k[j]`` less half the crossing sides' duals at ``i`` and at ``j``, is then a
-        clusters x clusters product (``W W``), a nodes x clusters one (``W P``, the halves
-        added) and a sparse one over the few node pairs in a ``P`` (``P P``), summed per edge by
+        The weight of edge ``(i, j)``, ``sum_k d_k s_k[i] s_k[j]`` less half the crossing sides'
+        duals at ``i`` and at ``j``, is then a clusters x clusters product (``W W``), a nodes x
+        clusters one (``W P``, the halves added) and a sparse one over the few node pairs in a
+        ``P`` (``P P``), summed per edge by
         :func:`~gtsp_bench.solvers.exact.mip.flow.edge_weights`. At UAV K = 200 (3,663 nodes,
         2,756 sides with a dual, 6,135 of their nodes outside whole clusters) the dense ``(n,
         n)`` product over nodes took 2.8 s a call, this 0.4 s.
