@@ -78,6 +78,19 @@ class GtspModel:
         """Whether every cost is an integer (then a gap below 1 proves optimality)."""
         return bool(np.all(self.cost == np.round(self.cost)))
 
+    def edge_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Edge numbers of the node pairs ``(a, b)``, ``a < b`` in different clusters.
+
+        The edges are :func:`build_model`'s: every pair of nodes of different clusters, in
+        ``(tail, head)`` order, so edge ``(i, j)`` is number ``first[i] + j - after[i]``, with
+        ``after[i]`` the node after ``i``'s cluster and ``first[i]`` the number of ``i``'s first edge.
+        """
+        after = np.searchsorted(self.cluster, self.cluster, side="right")
+        first = np.concatenate([[0], np.cumsum(self.n_nodes - after)[:-1]])
+        if first[-1] + self.n_nodes - after[-1] != len(self.tail):
+            raise ValueError("edge numbers need build_model's edges (every pair between clusters)")
+        return first[a] + b - after[a]
+
     def split(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(y, x)`` parts of a column vector."""
         return values[:self.n_nodes], values[self.n_nodes:]
@@ -150,7 +163,8 @@ def build_model(problem: Problem, kept: Sequence[np.ndarray]) -> GtspModel:
     return GtspModel(problem, nodes, cluster, tail, head, cost)
 
 
-def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np.ndarray:
+def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None,
+                 block: int = 4_000_000) -> np.ndarray:
     """The columns of the first LP: a core of cheap edges (the others are priced in later).
 
     Parameters
@@ -158,10 +172,13 @@ def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np
     model
         The model.
     per_node
-        Cheapest edges kept at each node (0: every column).
+        Cheapest edges kept at each node (0: every column); on equal costs, those to later
+        nodes first, then to earlier ones, each in node order.
     tour
         Problem node ids of a tour whose edges join (keeping the LP feasible), or ``None``;
         ignored when it uses a node the model does not have.
+    block
+        Node pairs looked at a time (memory: a few arrays of this many entries).
 
     Returns
     -------
@@ -171,20 +188,36 @@ def core_columns(model: GtspModel, per_node: int, tour: np.ndarray | None) -> np
     n = model.n_nodes
     if per_node == 0:
         return np.arange(model.n_cols)
-    e = np.arange(len(model.tail))
-    ends = np.concatenate([model.tail, model.head])
-    order = np.lexsort((np.concatenate([model.cost[n:], model.cost[n:]]), ends))
-    rank = np.empty(len(order), dtype=np.int64)
-    start = np.searchsorted(ends[order], np.arange(n))
-    rank[order] = np.arange(len(order)) - np.repeat(start, np.bincount(ends, minlength=n))
-    keep = np.zeros(len(e), dtype=bool)
-    keep[np.concatenate([e, e])[rank < per_node]] = True
+    keep = np.zeros(len(model.tail), dtype=bool)
+    # rows of the (n, n) matrix of edge costs (inf within a cluster), a block of rows at a time:
+    # the per_node-th cost of each row, then the ties at it in the order above (one lexsort of
+    # both ends of every edge took 7-12 s at UAV K = 200)
+    step = max(1, block // max(1, n))
+    cols = np.arange(n)
+    for r0 in range(0, n, step):
+        rows = np.arange(r0, min(n, r0 + step))
+        cost = np.full((len(rows), n), np.inf)
+        other = model.cluster[None, :] != model.cluster[rows, None]
+        lo, hi = np.minimum(rows[:, None], cols), np.maximum(rows[:, None], cols)
+        cost[other] = model.cost[n + model.edge_ids(lo[other], hi[other])]
+        kth = per_node - 1
+        if kth < n:
+            limit = np.partition(cost, kth, axis=1)[:, kth:kth + 1]
+        else:
+            limit = np.full((len(rows), 1), np.inf)
+        chosen = cost < limit
+        tie = (cost == limit) & np.isfinite(cost)
+        later = cols[None, :] > rows[:, None]
+        ahead = np.cumsum(tie & later, axis=1)  # ties to later nodes, up to and at each column
+        rank = np.where(later, ahead, ahead[:, -1:] + np.cumsum(tie & ~later, axis=1)) - 1
+        chosen |= tie & (rank < per_node - chosen.sum(axis=1, keepdims=True))
+        i, j = np.nonzero(chosen)
+        keep[model.edge_ids(np.minimum(rows[i], j), np.maximum(rows[i], j))] = True
     if tour is not None:
         local = np.full(model.problem.n_nodes, -1)
         local[model.nodes] = np.arange(n)
         t = local[tour]
         if np.all(t >= 0):  # (the tour may use pruned nodes)
             a, b = np.minimum(t, np.roll(t, -1)), np.maximum(t, np.roll(t, -1))
-            keys = model.tail * n + model.head  # sorted: edges come in (tail, head) order
-            keep[np.searchsorted(keys, a * n + b)] = True
+            keep[model.edge_ids(a, b)] = True
     return np.concatenate([np.arange(n), n + np.flatnonzero(keep)])

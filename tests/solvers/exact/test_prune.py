@@ -76,20 +76,70 @@ def test_past_deadline_stops_early_and_keeps_everything():
     assert [len(k) for k in kept] == [len(c) for c in problem.clusters]
 
 
+def _first_cheapest(node: np.ndarray, to_neigh: np.ndarray, cluster: np.ndarray) -> dict:
+    """The first cheapest row for every neighbour pair ``a < b`` of two clusters (plain argmin)."""
+    return {(a, b): int(np.argmin(node + to_neigh[:, a] + to_neigh[:, b]))
+            for a in range(len(cluster)) for b in range(a + 1, len(cluster)) if cluster[a] != cluster[b]}
+
+
 @pytest.mark.parametrize("seed", range(6))
-def test_cheapest_kernel_matches_a_plain_argmin(seed):
-    """The compiled kernel marks exactly the first cheapest head of every neighbour pair of two
-    different clusters (integer costs: many ties)."""
-    from gtsp_bench.solvers.exact.prune import _cheapest_kernel
+def test_witness_kernel_matches_a_plain_argmin(seed):
+    """The compiled kernel gives each row a pair it is the first cheapest head for, finds one for
+    every row that has one when all are pending, and stops once the pending rows have theirs
+    (integer costs: many ties)."""
+    from gtsp_bench.solvers.exact.prune import _witness_kernel
 
     rng = np.random.default_rng(seed)
     n, a_count = int(rng.integers(1, 8)), int(rng.integers(2, 30))
     to_neigh = rng.integers(0, 5, (n, a_count)).astype(float)
     node = rng.integers(0, 3, n).astype(float)
     cluster = np.sort(rng.integers(0, 4, a_count))
+    best = _first_cheapest(node, to_neigh, cluster)
     expected = np.zeros(n, dtype=bool)
-    for a in range(a_count):
-        for b in range(a + 1, a_count):
-            if cluster[a] != cluster[b]:
-                expected[np.argmin(node + to_neigh[:, a] + to_neigh[:, b])] = True
-    np.testing.assert_array_equal(_cheapest_kernel(to_neigh, node, cluster), expected)
+    expected[list(best.values())] = True
+    for pending in (np.ones(n, dtype=bool), rng.random(n) < 0.5):
+        witness = _witness_kernel(to_neigh, node, cluster, pending)
+        found = witness[:, 0] >= 0
+        assert np.all(found <= expected)
+        np.testing.assert_array_equal(found[pending], expected[pending])
+        for v in np.flatnonzero(found):
+            assert best[(int(witness[v, 0]), int(witness[v, 1]))] == v
+        if pending.all():
+            np.testing.assert_array_equal(found, expected)
+
+
+def _full_scan_prune(problem: Problem) -> list[np.ndarray]:
+    """Pruning by a full scan of every cluster in every pass (plain argmins), to the fixpoint."""
+    kept = [np.asarray(c) for c in problem.clusters]
+    changed = True
+    while changed:
+        changed = False
+        for c in range(len(kept)):
+            others = [j for j in range(len(kept)) if j != c]
+            neigh = np.concatenate([kept[j] for j in others])
+            cluster = np.repeat(others, [len(kept[j]) for j in others])
+            to_neigh = problem.edge_cost[np.ix_(kept[c], neigh)]
+            keep = np.zeros(len(kept[c]), dtype=bool)
+            keep[list(_first_cheapest(problem.node_cost[kept[c]], to_neigh, cluster).values())] = True
+            if not keep.all():
+                kept[c], changed = kept[c][keep], True
+    return kept
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pruning_by_witnesses_keeps_what_full_scans_keep(seed):
+    """Re-scanning only the clusters whose nodes lost their witness pair keeps exactly the nodes
+    that full scans of every cluster in every pass keep (K = 6-9 clusters of 2-6 nodes, with and
+    without a depot, ties on a small integer grid)."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(6, 10))
+    if seed % 2:
+        clusters = tuple(rng.integers(0, 5, size=(int(s), 2)).astype(float) for s in rng.integers(2, 7, k))
+        problem = price(Instance(name=f"grid{seed}", clusters=clusters, params=None,
+                                 edge_weight_type="EUC_2D"), None)
+    else:
+        problem = price(generate_instance(k, 6, seed=seed), float(rng.uniform()))
+    kept = prune_heads(problem)
+    expected = _full_scan_prune(problem)
+    assert [k.tolist() for k in kept] == [e.tolist() for e in expected]
+    assert sum(len(e) for e in expected) < problem.n_nodes  # some node was pruned

@@ -107,3 +107,49 @@ def test_core_columns_keep_all_y_the_cheapest_edges_and_the_tour():
     degree = np.bincount(np.concatenate([model.tail[edges], model.head[edges]]), minlength=model.n_nodes)
     assert np.all(degree >= np.minimum(2, model.n_nodes - np.bincount(model.cluster)[model.cluster]))
     assert len(core_columns(model, 0, None)) == model.n_cols
+
+
+def _core_by_lexsort(model: GtspModel, per_node: int) -> np.ndarray:
+    """The core edges by one sort of both ends of every edge by (node, cost, edge position)."""
+    n = model.n_nodes
+    e = np.arange(len(model.tail))
+    ends = np.concatenate([model.tail, model.head])
+    order = np.lexsort((np.concatenate([model.cost[n:], model.cost[n:]]), ends))
+    rank = np.empty(len(order), dtype=np.int64)
+    start = np.searchsorted(ends[order], np.arange(n))
+    rank[order] = np.arange(len(order)) - np.repeat(start, np.bincount(ends, minlength=n))
+    keep = np.zeros(len(e), dtype=bool)
+    keep[np.concatenate([e, e])[rank < per_node]] = True
+    return np.concatenate([np.arange(n), n + np.flatnonzero(keep)])
+
+
+def test_core_columns_by_blocks_of_rows_equal_one_sort_of_every_edge():
+    """The cheapest edges per node, found a block of rows of the cost matrix at a time, are those
+    of one sort of every edge's two ends (ties broken the same way: integer costs on a grid, many
+    ties), for blocks of one row to all, and for more edges asked than a node has."""
+    rng = np.random.default_rng(5)
+    for _ in range(6):
+        clusters = tuple(rng.integers(0, 4, size=(int(s), 2)).astype(float)
+                         for s in rng.integers(1, 5, int(rng.integers(3, 8))))
+        problem = price(Instance(name="grid", clusters=clusters, params=None,
+                                 edge_weight_type="EUC_2D"), None)
+        model = build_model(problem, problem.clusters)
+        for per_node in (1, 2, 3, model.n_nodes + 1):
+            expected = _core_by_lexsort(model, per_node)
+            for block in (1, 7, 10**6):
+                np.testing.assert_array_equal(core_columns(model, per_node, None, block), expected)
+    model = _model(2, k=7)
+    np.testing.assert_array_equal(core_columns(model, 3, None), _core_by_lexsort(model, 3))
+
+
+def test_edge_ids_number_every_pair_between_clusters():
+    """The edge number of each edge's own ends is its position; a model with an edge left out is
+    refused (the numbers assume every pair between clusters)."""
+    import pytest
+
+    model = _model(4, k=6)
+    np.testing.assert_array_equal(model.edge_ids(model.tail, model.head), np.arange(len(model.tail)))
+    fewer = GtspModel(model.problem, model.nodes, model.cluster, model.tail[1:], model.head[1:],
+                      np.delete(model.cost, model.n_nodes))
+    with pytest.raises(ValueError, match="every pair"):
+        fewer.edge_ids(model.tail[:1], model.head[:1])

@@ -7,7 +7,7 @@ from collections import Counter
 import numpy as np
 from gtsp_bench.solvers.exact.mip import branch_cut, separation
 from gtsp_bench.solvers.exact.mip.model import GtspModel
-from gtsp_bench.solvers.exact.mip.separation import Cuts, subtour_cuts
+from gtsp_bench.solvers.exact.mip.separation import Cuts, subtour_cut, subtour_cuts
 
 from .test_model import _all_tours, _model, _random_tour, _vector
 
@@ -114,7 +114,6 @@ def test_sparsest_form_is_the_same_row_on_every_tour_with_fewer_nonzeros():
     """Sides rewritten over their crossing edges give the same left-hand side at every tour
     (the degree rows hold there), no more nonzeros over the columns it was chosen for, and dual
     weights (both ways) equal to the duals times the new coefficients."""
-    from gtsp_bench.solvers.exact.mip.separation import subtour_cut
 
     model = _model(7, k=5, max_size=3)
     rng = np.random.default_rng(4)
@@ -144,12 +143,70 @@ def test_sparsest_form_is_the_same_row_on_every_tour_with_fewer_nonzeros():
     assert turned > 0
 
 
+def _dense_dual_weights(cuts: Cuts, model: GtspModel, duals: np.ndarray,
+                       edges: np.ndarray) -> np.ndarray:
+    """The edge weights by the ``(n, n)`` node-pair product (the form before node classes)."""
+    d = duals[cuts.row]
+    sf = cuts.side.astype(float)
+    pair = (sf * d[:, None]).T @ sf
+    half = -0.5 * (d[cuts.cross] @ sf[cuts.cross])
+    t, h = model.tail[edges], model.head[edges]
+    return pair[t, h] + half[t] + half[h]
+
+
+def _random_family(model: GtspModel, rng: np.random.Generator) -> Cuts:
+    """Random cuts as the separators make them: unions of whole clusters, a cluster and one node
+    of another, generalized subtour sides splitting clusters (either form), multi-side rows."""
+    n, m = model.n_nodes, model.n_clusters
+    blocks = []
+    for _ in range(12):
+        union = np.isin(model.cluster, np.flatnonzero(rng.random(m) < 0.4))
+        blocks.append(Cuts.one(union, -union.astype(float), float(union.sum() - 1)))
+        node_cluster = model.cluster == rng.integers(m)
+        node_cluster[rng.integers(n)] = True
+        blocks.append(Cuts.one(node_cluster, np.zeros(n), 1.0))
+        c, d = rng.choice(m, 2, replace=False)
+        blocks.append(subtour_cut(model, rng.random(n) < rng.uniform(0.2, 0.8), int(c), int(d)))
+    handle = [np.isin(model.cluster, np.flatnonzero(rng.random(m) < 0.5))]
+    teeth = [np.isin(model.cluster, rng.choice(m, 2, replace=False)) for _ in range(3)]
+    blocks.append(Cuts.one(np.array(handle + teeth), np.zeros(n), 2.0))
+    cuts = Cuts.stack(blocks)
+    return cuts.sparsest(model, np.arange(model.n_cols))  # some sides crossing
+
+
+def test_dual_weights_by_whole_clusters_equal_the_dense_product(monkeypatch):
+    """On random cut families (sides of whole clusters, sides that split clusters, crossing sides,
+    several sides a row, zero duals among them), the edge weights computed from the clusters each
+    side holds whole and its other nodes (the form above ``DENSE_NODES`` nodes, here forced)
+    equal the dense node-pair product and the duals times the cut matrix, over every edge and
+    over a subset in another order."""
+    monkeypatch.setattr(separation, "DENSE_NODES", 0)
+    crossed = split = 0
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        model = _model(seed, k=7, max_size=4)
+        cuts = _random_family(model, rng)
+        crossed += int(cuts.cross.sum())
+        split += sum(len(np.unique(cuts.side[k, model.cluster == c])) > 1
+                     for k in range(len(cuts.row)) for c in range(model.n_clusters))
+        duals = -rng.random(len(cuts)) * (rng.random(len(cuts)) < 0.7)
+        n = model.n_nodes
+        every = np.arange(len(model.tail))
+        for edges in (every, rng.permutation(every)[:len(every) // 2 + 1]):
+            nz = np.abs(duals[cuts.row]) > 1e-12
+            assert len(edges) * nz.sum() >= 4 * n**2  # the clusters' path is taken
+            on_edge, on_y = cuts.dual_weights(model, duals, edges)
+            np.testing.assert_allclose(on_edge, _dense_dual_weights(cuts, model, duals, edges),
+                                       rtol=0, atol=1e-12)
+            np.testing.assert_allclose(on_edge, duals @ cuts.matrix(model, n + edges), rtol=0, atol=1e-12)
+            np.testing.assert_allclose(on_y, duals @ cuts.ycoef, rtol=0, atol=1e-12)
+    assert crossed > 0 and split > 0
+
+
 def test_generalized_subtour_cut_holds_for_every_tour_and_is_tight():
     """``Subtour(S, C, D)`` for random node sets (splitting clusters, on either side's form)
     holds for every tour, and some tour with its heads of C inside S and of D outside meets it
     at equality (it crosses S exactly twice)."""
-    from gtsp_bench.solvers.exact.mip.separation import subtour_cut
-
     rng = np.random.default_rng(3)
     model = _model(7, k=5, max_size=3)
     tours = _all_tours(model)
