@@ -64,13 +64,7 @@ def keep_best_known(df: pd.DataFrame, library: Path, today: str,
     from gtsp_bench.data import gtsplib
     from gtsp_bench.data.io import read_text
 
-    table_path = library / "best_known.csv"
-    try:
-        table = gtsplib.parse_best_known(table_path.read_text(encoding="utf-8"))
-    except InputError as e:
-        raise InputError(f"{table_path}: {e}") from None
-    except OSError as e:
-        raise InputError(f"{table_path}: cannot read it ({e.strerror or e})") from None
+    table = gtsplib.read_best_known(library)
     has_tour = df["order"].notna() & (df["order"].astype(str).str.strip() != "")
     ok = df[df["objective"].notna() & df["instance"].isin(list(table)) & has_tour]
     kept = []

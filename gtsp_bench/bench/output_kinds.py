@@ -465,14 +465,14 @@ def _update_references(
         changed = []
         # Only the references benchmark adds omegas: a set holds the omegas its file names
         # (a set measured at omega 0 and 0.9 by another benchmark keeps its own grid).
-        held = {o for _, o in have} if have and bench.name != "references" else None
-        skipped = sorted({str(r.omega) for r in rows if held is not None and r.omega not in held})
-        if skipped:
-            say(f"{s.reference_path}: not updated at omega {', '.join(skipped)} "
-                "(the set does not hold it; the rows keep those tours)")
+        if have and bench.name != "references":
+            held = {o for _, o in have}
+            skipped = sorted({str(r.omega) for r in rows if r.omega not in held})
+            if skipped:
+                say(f"{s.reference_path}: not updated at omega {', '.join(skipped)} "
+                    "(the set does not hold it; the rows keep those tours)")
+            rows = [r for r in rows if r.omega in held]
         for r in rows:
-            if held is not None and r.omega not in held:
-                continue
             old = have.get((r.instance, r.omega))
             if old is None or (
                 old.status != "optimal" and (strictly_better(r.value, old.value) or r.status == "optimal")

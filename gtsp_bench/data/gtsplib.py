@@ -180,13 +180,26 @@ def folder() -> Path:
     return where
 
 
-@lru_cache(maxsize=4)
-def _best_known(where: Path) -> dict[str, Reference]:
+def read_best_known(where: Path) -> dict[str, Reference]:
+    """The table ``where/best_known.csv`` (read now, not cached).
+
+    Raises
+    ------
+    InputError
+        ``FILE: problem``: the table is unreadable or malformed.
+    """
     table = where / "best_known.csv"
     try:
         return parse_best_known(table.read_text(encoding="utf-8"))
     except InputError as e:
         raise InputError(f"{table}: {e}") from None
+    except OSError as e:
+        raise InputError(f"{table}: cannot read it ({e.strerror or e})") from None
+
+
+@lru_cache(maxsize=4)
+def _best_known(where: Path) -> dict[str, Reference]:
+    return read_best_known(where)
 
 
 def best_known() -> dict[str, Reference]:
@@ -249,12 +262,7 @@ def keep_tour(where: Path, name: str, order: Sequence[int], heads: Sequence[int]
         shorter than a proven optimum (the solver or the table is wrong).
     """
     table_path = where / "best_known.csv"
-    try:
-        table = parse_best_known(table_path.read_text(encoding="utf-8"))
-    except InputError as e:
-        raise InputError(f"{table_path}: {e}") from None
-    except OSError as e:
-        raise InputError(f"{table_path}: cannot read it ({e.strerror or e})") from None
+    table = read_best_known(where)
     if name not in table:
         raise InputError(f"{table_path}: no instance {name!r}")
     ref = table[name]
