@@ -15,6 +15,7 @@ from gtsp_bench.solvers.learned.local import (  # noqa: E402
     LocalPolicy,
     Walk,
     _flight_per_m,
+    encoder_layer,
     frame,
     turn,
 )
@@ -143,3 +144,31 @@ def test_decoding_with_shrunk_views_matches_padded_views():
             v = walk.view()
             steps.append(walk.move(v, model.scores(*turn(v, maps), v.mask).argmax(-1)))
     assert torch.equal(order, torch.stack(steps, 1))
+
+
+@pytest.mark.parametrize("padded", [False, True])
+def test_encoder_layer_is_the_modules_layer(padded):
+    """Decoding's plain-operation layer gives the module's outputs (every unpadded token), and
+    scores with and without gradients agree (training runs the module, decoding the function)."""
+    torch.manual_seed(2)
+    model = LocalPolicy(dim=32, n_heads=4, n_layers=2, ff=48, k=6).eval()
+    layer = model.encoder.layers[0]
+    x = torch.randn(5, 7, 32)
+    pad = None
+    if padded:
+        pad = torch.zeros(5, 7, dtype=torch.bool)
+        pad[1, 4:] = True
+        pad[3, 6] = True
+    with torch.inference_mode():
+        ours = encoder_layer(layer, x, pad)
+        theirs = layer(x, src_key_padding_mask=pad)
+    keep = torch.ones(5, 7, dtype=torch.bool) if pad is None else ~pad
+    assert torch.allclose(ours[keep], theirs[keep], atol=1e-5)
+    mask = torch.ones(5, 6, dtype=torch.bool) if pad is None else ~pad[:, 1:]
+    args = (torch.randn(5, 6, 2, 2), torch.randn(5, 6, 2), torch.randn(5, 2, 2), torch.randn(5, 3))
+    with torch.inference_mode():
+        fast = model.scores(*args, mask)
+    slow = model.scores(*args, mask)
+    assert slow.requires_grad
+    assert torch.allclose(fast[mask], slow.detach()[mask], atol=1e-5)
+    assert torch.isinf(fast[~mask]).all()
