@@ -263,6 +263,12 @@ def option_names(solver: str | type) -> tuple[str, ...] | None:
     return tuple(params)
 
 
+def can_warm_start(name: str) -> bool:
+    """Whether the registered solver ``name`` can start from an initial solution (its ``solve``
+    declares ``initial``)."""
+    return takes_keyword(_solver_class(name), "initial")
+
+
 def check_option_names(name: str, options: Iterable[str]) -> None:
     """:class:`InputError` (one line, listing the valid ones) when the registered solver ``name``
     does not take one of ``options`` (keyword names); the values are the solver's to check."""

@@ -149,6 +149,15 @@ class FixedTour:
         return Solution(order, heads, evaluate(instance, omega, order, heads).objective)
 
 
+class Echo:
+    """Returns its warm start unchanged (FixedTour's tour without one)."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0, initial=None):
+        if initial is None:
+            return FixedTour().solve(instance, omega)
+        return Solution(initial.order, initial.heads, initial.objective)
+
+
 class Revised(FixedTour):
     """FixedTour with a revision tag the tests change (as a learned policy's new weights would)."""
 
@@ -196,14 +205,15 @@ class UsesTorch(_GreedyAfterImport):
 
 
 def register() -> None:
-    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-revised, t-highs,
+    """Register these solvers as t-crash, t-hang, t-slow, t-fixed, t-echo, t-revised, t-highs,
     t-ortools, t-torch, t-banner, t-killed, t-kills-dask, t-oom, t-refuses and t-missing (whose
     class does not exist), all with ``bench=False``."""
     for name, cls in (("t-crash", "Crash"), ("t-hang", "Hang"), ("t-slow", "Slow"),
                       ("t-banner", "Banner"), ("t-killed", "KilledFromOutside"),
                       ("t-kills-dask", "KillsItsDaskWorker"),
                       ("t-oom", "OutOfMemory"), ("t-refuses", "Refuses"),
-                      ("t-fixed", "FixedTour"), ("t-revised", "Revised"), ("t-highs", "UsesHighs"),
+                      ("t-fixed", "FixedTour"), ("t-echo", "Echo"), ("t-revised", "Revised"),
+                      ("t-highs", "UsesHighs"),
                       ("t-ortools", "UsesOrtools"), ("t-torch", "UsesTorch"),
                       ("t-missing", "NoSuchClass")):
         register_solver(name, f"tests.runner_solvers:{cls}", "runner test solver", bench=False,

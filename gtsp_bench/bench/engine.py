@@ -33,7 +33,7 @@ from gtsp_bench.bench.definitions import (
 )
 from gtsp_bench.bench.execute import Folder, Outcome, _say, execute
 from gtsp_bench.bench.rows import Cell
-from gtsp_bench.bench.sources import Entry, load_sources
+from gtsp_bench.bench.sources import Entry, best_known_tour, load_sources
 from gtsp_bench.bench.tasklog import exclusive_lock
 from gtsp_bench.bench.tasks import (
     BatchTask,
@@ -80,6 +80,12 @@ class Settings:
                  "--instances": self.instances, "--nodes": self.nodes, "--omegas": self.omegas,
                  "--seeds": self.seeds, "--time-limit": self.time_limit, "-p": self.params or None}
         return [flag for flag, value in given.items() if value is not None]
+
+
+#: The solver option (``-p initial=best-known``) that starts each solve of a GTSPLIB file from the
+#: library's best-known tour (:func:`gtsp_bench.bench.sources.best_known_tour`); the engine
+#: resolves it, the solver gets the tour as its ``initial`` solution.
+WARM_START, BEST_KNOWN = "initial", "best-known"
 
 
 def _with_instances(src: Any, n: int) -> Any:
@@ -166,14 +172,21 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
     InputError
         An option that no run's solver takes (the first run's options listed).
     """
-    from gtsp_bench.registry import check_option_names, option_names
+    from gtsp_bench.registry import can_warm_start, check_option_names, option_names
 
     given = dict(params)
+    warm = given.pop(WARM_START, None)
+    if warm is not None and warm != BEST_KNOWN:
+        raise InputError(f"--param {WARM_START}={warm}: the one warm start of a benchmark is "
+                         f"{WARM_START}={BEST_KNOWN} (the library's best-known tour of each GTSPLIB file)")
     used: set[str] = set()
     out = []
     for r in runs:
         takes = option_names(r.solver)
         mine = {k: v for k, v in given.items() if takes is None or k in takes}
+        if warm is not None and can_warm_start(r.solver):
+            mine[WARM_START] = warm
+            used.add(WARM_START)
         used.update(mine)
         if not mine:
             out.append(r)
@@ -184,6 +197,9 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
     # an option no run takes: the first run's solver does not take it either (one line, its
     # options listed)
     check_option_names(runs[0].solver, [k for k in given if k not in used])
+    if warm is not None and WARM_START not in used:
+        raise InputError(f"--param {WARM_START}={warm}: no solver of the run can start from a tour "
+                         f"(solvers: {', '.join(sorted({r.solver for r in runs}))})")
     return tuple(out)
 
 
@@ -240,6 +256,7 @@ def plan(bench: Benchmark, settings: Settings) -> Plan:
     cells: list[Cell] = []
     tasks: dict[str, Task] = {}
     exact: dict[tuple[str, str, float | None], tuple[str, str]] = {}
+    tours: dict[str, tuple[tuple[tuple[int, ...], tuple[int, ...]], str]] = {}
 
     def add(
         e: Entry,
@@ -250,8 +267,18 @@ def plan(bench: Benchmark, settings: Settings) -> Plan:
         tl: float | None,
     ) -> str:
         run_w = DISTANCE_OMEGA if w is None else w
-        key = task_key(e.stored, solver, run_w, seed, tl, options)
-        tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options))
+        mine = dict(options)
+        initial = None
+        if mine.pop(WARM_START, None) is not None:
+            if e.stem not in tours:
+                tours[e.stem] = best_known_tour(e)
+            initial, tour_file = tours[e.stem]
+            options = tuple(sorted(mine.items()))
+            # the key names the tour file, so a shorter tour kept since starts new solves
+            key = task_key(e.stored, solver, run_w, seed, tl, (*options, (WARM_START, tour_file)))
+        else:
+            key = task_key(e.stored, solver, run_w, seed, tl, options)
+        tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options, initial))
         return key
 
     for e in entries:
@@ -279,7 +306,7 @@ def batches(bench: Benchmark, p: Plan, todo: Sequence[Task]) -> list[Task | Batc
     wanted = {t.key for t in todo}
     groups: dict[tuple[Any, ...], list[Task]] = {}
     for c in p.cells:
-        if c.key in wanted:
+        if c.key in wanted and p.tasks[c.key].initial is None:  # a warm start is solved alone
             groups.setdefault((c.entry.set, c.entry.k, c.run, c.omega, c.seed), []).append(p.tasks[c.key])
     grouped = {t.key for g in groups.values() for t in g}
     jobs: list[Task | BatchTask] = [t for t in todo if t.key not in grouped]

@@ -79,10 +79,11 @@ def _limit_threads() -> None:
 
 
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
-    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options]}`` through
-    the harness; a batch message (``batch``: a list of ``{fingerprint, text}``, ``repeats``) is
-    solved in one call (:func:`gtsp_bench.registry.run_solver_batch`) and answered with one record
-    per instance in ``items``.
+    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options, initial]}``
+    (``initial``: a warm start ``[order, heads]``) through the harness; a batch message
+    (``batch``: a list of ``{fingerprint, text}``, ``repeats``) is solved in one call
+    (:func:`gtsp_bench.registry.run_solver_batch`) and answered with one record per instance in
+    ``items``.
 
     The instance text (JSON, or GTSPLIB's format) is parsed once per fingerprint; a message with
     solver ``options`` is solved by a solver built with them (once per set of options). An
@@ -114,8 +115,10 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
                                              repeats=msg.get("repeats", 1))
             out = {"status": "batch", "items": [_record(r) for r in results], "batch_wall_s": wall}
         else:
+            start_from = msg.get("initial")
             res = run_solver(solver, parsed(msg), msg["omega"], time_limit=msg["time_limit"],
-                             seed=msg["seed"], name=name)
+                             seed=msg["seed"], name=name,
+                             initial=None if start_from is None else tuple(start_from))
             out = _record(res)
     except InputError as e:  # the solver declines this input by design
         out = failure(one_line(e), "refused")

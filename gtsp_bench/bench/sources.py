@@ -187,6 +187,29 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
     return out
 
 
+def best_known_tour(e: Entry) -> tuple[tuple[tuple[int, ...], tuple[int, ...]], str]:
+    """The best-known tour of a GTSPLIB entry in the library it was read from (the
+    ``best_known.csv`` beside its file), as a warm start ``(order, heads)``, and the name of its
+    tour file (which changes when a shorter tour is kept).
+
+    Raises
+    ------
+    InputError
+        ``FILE: problem``: no ``best_known.csv`` beside the file names it (UAV sets keep values,
+        not tours), or its tour file cannot be read.
+    """
+    from gtsp_bench.data import gtsplib
+    from gtsp_bench.data.io import read_tour
+
+    where = e.stored.path.parent
+    ref = gtsplib.read_best_known(where).get(e.stem) if (where / "best_known.csv").is_file() else None
+    if ref is None:
+        raise InputError(f"{e.stored.path}: initial=best-known starts from the tour of a GTSPLIB file "
+                         "that its folder's best_known.csv names; this file has none")
+    order, heads = read_tour(where / ref.tour, e.stored.instance)
+    return (tuple(order), tuple(heads)), ref.tour
+
+
 def load_sources(
     sources: Sequence[Source],
     instance_dir: Path,

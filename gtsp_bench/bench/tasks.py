@@ -93,7 +93,8 @@ class StoredInstance:
 @dataclass(frozen=True)
 class Task:
     """One solve; ``key`` identifies it in the task log; ``options`` are the solver's keyword
-    options (none: its defaults)."""
+    options (none: its defaults); ``initial``, a warm start's ``(order, heads)`` (none: the
+    solver's own first tour)."""
 
     key: str
     solver: str
@@ -102,6 +103,7 @@ class Task:
     seed: int
     time_limit: float
     options: tuple[tuple[str, Any], ...] = ()
+    initial: tuple[tuple[int, ...], tuple[int, ...]] | None = None
 
 
 @dataclass(frozen=True)
@@ -175,6 +177,8 @@ def _task_message(t: Task | BatchTask) -> dict[str, Any]:
     else:
         msg.update(fingerprint=t.instance.fingerprint, text=t.instance.text)
         msg["hard_limit"] = hard_limit_for(t.time_limit)
+        if t.initial is not None:
+            msg["initial"] = [list(t.initial[0]), list(t.initial[1])]
     if first.options:
         msg["options"] = dict(first.options)
     return msg

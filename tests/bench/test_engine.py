@@ -402,6 +402,42 @@ def test_params_set_options_where_a_solver_takes_them_and_name_them_in_the_label
         with_params(runs, [("nope", 1)])
 
 
+def test_initial_best_known_starts_each_gtsplib_solve_from_the_librarys_tour(tmp_path, capsys):
+    """-p initial=best-known: the solver gets the library's tour (a solver that returns its warm
+    start unchanged lands at the best-known value), the label says so and the task key names the
+    tour file; a file without a tour, a solver that cannot start from one and another value are
+    one error line each, exit code 2, nothing written."""
+    from gtsp_bench.data import gtsplib
+
+    out = tmp_path / "out"
+    argv = ["bench", "sets", "--set", "gtsplib", "--names", "11berlin52,16eil76", "--solvers", "t-echo",
+            "-p", "initial=best-known", "--out", str(out), "--jobs", "1", "--no-progress"]
+    assert main(argv) == 0
+    rows = pd.read_csv(out / "rows.csv").set_index("instance")
+    table = gtsplib.best_known()
+    for name in ("11berlin52", "16eil76"):
+        assert rows.loc[name, "objective"] == pytest.approx(table[name].value, rel=1e-12)
+        assert rows.loc[name, "label"] == "t-echo initial=best-known"
+    keys = [json.loads(line)["key"] for line in (out / "tmp" / "runs.jsonl").read_text().splitlines()]
+    assert sorted(k.split("|")[1] for k in keys) == sorted(
+        f"t-echo[initial={table[n].tour!r}]" for n in ("11berlin52", "16eil76"))
+    capsys.readouterr()
+    for bad, says in (
+        (["--set", str(REPO / "instances" / "uav-K4-N20-s1"), "--instances", "1", "--solvers", "t-echo"],
+         "uav-K4-N20-s1-000.json: initial=best-known starts from the tour of a GTSPLIB file that"),
+        (["--set", "gtsplib", "--names", "11berlin52", "--solvers", "t-fixed"],
+         "no solver of the run can start from a tour (solvers: t-fixed)"),
+    ):
+        assert main(["bench", "sets", *bad, "-p", "initial=best-known", "--out", str(tmp_path / "bad"),
+                     "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and says in err, err
+    assert main(["bench", "sets", "--set", "gtsplib", "--names", "11berlin52", "--solvers", "t-echo",
+                 "-p", "initial=glkh", "--out", str(tmp_path / "bad"), "--no-progress"]) == 2
+    assert "the one warm start of a benchmark is initial=best-known" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
+
+
 def test_a_gtsplib_tour_below_the_best_known_is_kept_only_with_update_reference(tmp_path, capsys):
     """A GTSPLIB copy whose best_known value greedy beats: the run says how many solves went below
     and how to keep them, and writes nothing there; with --update-reference (the solve re-used)
