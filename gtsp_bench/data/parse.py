@@ -335,7 +335,7 @@ def _coords_fast(lines: list[str], dim: int) -> np.ndarray | None:
     except ValueError:
         return None
     ids = table[:, 0]
-    if not (np.all(ids == np.round(ids)) and np.all(np.isfinite(table[:, 1:]))):
+    if not (np.all(np.isfinite(table)) and np.all(ids == np.round(ids))):  # inf ids: no cast
         return None
     nodes = ids.astype(np.int64)
     if nodes.min() < 1 or nodes.max() > dim or np.bincount(nodes).max() > 1:

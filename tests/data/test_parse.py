@@ -6,6 +6,7 @@ from __future__ import annotations
 import gzip
 import json
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -404,6 +405,16 @@ def test_gtsplib_coordinates_near_the_float_limit_are_refused():
     """Nodes at +-1e308 (finite) would make every distance infinite: refused at load."""
     with pytest.raises(InputError, match=r"clusters\[0\]\[1\]\[0\] = 1e\+308 is beyond"):
         parse_gtsp(SMALL.replace("3 6 8", "3 1e308 -1e308"))
+
+
+@pytest.mark.parametrize("node", ["inf", "-inf", "nan", "1.5"])
+def test_gtsplib_node_ids_that_are_not_integers_are_refused_without_a_warning(node):
+    """A node id of inf, nan or 1.5 is refused in one line, and the fast reader does not cast it
+    to an integer on the way (numpy's invalid-cast warning)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError):
+            parse_gtsp(SMALL.replace("3 6 8", f"{node} 6 8"))
 
 
 # ---------------------------------------------------------------------- fuzzing
