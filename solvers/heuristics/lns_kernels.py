@@ -498,7 +498,8 @@ def warm_up() -> None:
         cur = t.copy()
         run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, costs, node)),
                   np.zeros(4, dtype=np.int64), np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)),
-                  np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1, 1]), 4, costs, node, start, near, cluster_of, True)
+                  np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1, 1]), 4, costs, node, start, near, cluster_of,
+                  True)
         local_search(t.copy(), costs, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
         tour_cost(t, costs, node)
         random_insertion_tour(costs, node, start, near, cluster_of)
