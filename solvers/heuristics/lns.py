@@ -162,7 +162,7 @@ class _Search:
         return kernels.trial_settings(iterations, patience, s.hottest * mean_edge,
                                       s.end_temperature * mean_edge, self.max_remove,
                                       s.noise * mean_edge, s.reaction,
-                                      s.reopt_window_for(self.p.n_clusters))
+                                      s.reopt_window_for(self.p.n_clusters), s.plateau_for())
 
     def race(self, kinds: list[str], deadline: float | None
              ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, int]:
@@ -425,6 +425,11 @@ class Lns:
         The second trial starts from the best tour reversed, and its tour replaces the base only
         if it beat it (default: on asymmetric costs with effort ``budget``; a tour's direction can
         be a basin of its own there).
+    plateau
+        A new tour that costs the same as the current one replaces it in a trial (annealing's
+        ``exp(0) = 1``; default: with effort ``budget``, where on integer costs with many ties,
+        such as ``89rbg443``'s, the search can then drift along a plateau; else it is rejected,
+        as before).
     """
 
     asymmetric = True
@@ -443,7 +448,7 @@ class Lns:
         start_iterations: int = 5,
         paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
         fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
-        mirror: bool | None = None,
+        mirror: bool | None = None, plateau: bool | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
@@ -451,7 +456,7 @@ class Lns:
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, fail_passes, workers,
-                                    exchange, effort, mirror)
+                                    exchange, effort, mirror, plateau)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

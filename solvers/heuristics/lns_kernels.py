@@ -282,11 +282,13 @@ def one_trial(t: np.ndarray, cost: float, settings: np.ndarray, chunk: int, edge
 
 
 def trial_settings(iterations: int, patience: int, start_temperature: float, end_temperature: float,
-                   max_remove: int, noise: float, reaction: float, window: int) -> np.ndarray:
+                   max_remove: int, noise: float, reaction: float, window: int,
+                   plateau: bool = False) -> np.ndarray:
     """The ``settings`` array of :func:`run_trial`, in its order (temperatures and noise in cost
-    units; ``window``: the re-opt window's half-width, 0 for the full re-opt)."""
+    units; ``window``: the re-opt window's half-width, 0 for the full re-opt; ``plateau``: a tour
+    that costs the same as the current one replaces it)."""
     return np.array([iterations, patience, start_temperature, end_temperature, max_remove, noise,
-                     reaction, window], dtype=np.float64)
+                     reaction, window, float(plateau)], dtype=np.float64)
 
 
 @njit(cache=True, nogil=True)
@@ -301,7 +303,9 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
     ``counts`` = (iteration in the trial, iterations since a new trial best, iterations done,
     iteration of the best), the operator weights. ``settings`` = (iterations, patience, start
     temperature, end temperature, largest removal, noise, reaction, re-opt window half-width (0:
-    full re-opt)), temperatures and noise in cost units. On the windowed path the current cost is
+    full re-opt), plateau (1: a new tour that costs the same as the current one replaces it, as
+    annealing's rule ``exp(0) = 1`` would have it; 0: it is rejected)), temperatures and noise in
+    cost units. On the windowed path the current cost is
     counted by changes (:func:`iterate`) and a new trial best is priced from scratch. Iterations
     are scored, accepted (simulated
     annealing) and rewarded as the module :mod:`gtsp_bench.solvers.heuristics.lns` describes;
@@ -310,6 +314,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
     iterations, patience = int(settings[0]), int(settings[1])
     t0, t1, max_remove, noise, reaction = settings[2], settings[3], int(settings[4]), settings[5], settings[6]
     half = int(settings[7])
+    plateau = settings[8] > 0.0
     for _ in range(steps):
         it = counts[0]
         if it >= iterations or counts[1] >= patience:
@@ -335,7 +340,7 @@ def run_trial(cur: np.ndarray, best: np.ndarray, trial_best: np.ndarray, costs: 
             score = SCORES[2]
         else:
             score = SCORES[3]
-        if score > SCORES[3]:
+        if score > SCORES[3] or (plateau and new_cost <= cur_cost + tol):
             cur[:] = new
             costs[0] = new_cost
         if new_cost < best_cost - tol:
@@ -493,7 +498,8 @@ def warm_up() -> None:
         cur = t.copy()
         run_trial(cur, cur.copy(), cur.copy(), np.full(3, tour_cost(t, costs, node)),
                   np.zeros(4, dtype=np.int64), np.ones(len(REMOVALS)), np.ones(len(INSERTIONS)),
-                  np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1]), 4, costs, node, start, near, cluster_of, True)
+                  np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1, 1]), 4, costs, node, start, near, cluster_of,
+                  True)
         local_search(t.copy(), costs, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
         tour_cost(t, costs, node)
         random_insertion_tour(costs, node, start, near, cluster_of)

@@ -56,7 +56,7 @@ EFFORTS: dict[str, Effort] = {
 _OPTIONAL_INTS = (("iterations", 1), ("trials", 1), ("patience", 1), ("max_removals", 1),
                   ("neighbours", 1), ("restart_after", 0), ("reopt_window", 0), ("workers", 1))
 #: Boolean options that may be ``None`` (decided by the effort or the instance).
-_OPTIONAL_BOOLS = ("stop_at_convergence", "points", "quadrants", "mirror")
+_OPTIONAL_BOOLS = ("stop_at_convergence", "points", "quadrants", "mirror", "plateau")
 
 
 @dataclass(frozen=True)
@@ -93,6 +93,7 @@ class LnsSettings:
     exchange: float = 0.5
     effort: str | None = None
     mirror: bool | None = None
+    plateau: bool | None = None
 
     def __post_init__(self) -> None:
         # the options that may be None (the effort's or the instance's default): checked if given
@@ -220,6 +221,13 @@ class LnsSettings:
         if self.mirror is not None:
             return self.mirror
         return not symmetric and not self.stops
+
+    def plateau_for(self) -> bool:
+        """Whether a new tour that costs the same as the current one replaces it in a trial
+        (``plateau``; by default with effort ``budget``)."""
+        if self.plateau is not None:
+            return self.plateau
+        return not self.stops
 
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with

@@ -184,6 +184,7 @@ def test_operators_are_all_used():
     ({"starts": 0}, "starts must be an integer >= 1"),
     ({"start_iterations": 0}, "start_iterations must be an integer >= 1"),
     ({"mirror": 1}, "mirror must be true or false"),
+    ({"plateau": "yes"}, "plateau must be true or false"),
     ({"points": 1}, "points must be true or false"),
     ({"quadrants": "no"}, "quadrants must be true or false"),
     ({"workers": 0}, "workers must be an integer >= 1"),
@@ -490,6 +491,22 @@ def test_mirror_defaults_to_asymmetric_budget_runs():
         assert not LnsSettings(effort=effort).mirror_for(False)
     assert LnsSettings(effort="fast", mirror=True).mirror_for(True)
     assert not LnsSettings(mirror=False, **BUDGET).mirror_for(False)
+
+
+def test_plateau_defaults_to_budget_runs():
+    """Equal-cost tours replace the current one by default only with effort budget (the presets
+    that stop, the paper's runs among them, keep rejecting them); a given value wins, and the
+    trial settings carry it."""
+    assert LnsSettings(**BUDGET).plateau_for()
+    for effort in ("fast", "default", "slow"):
+        assert not LnsSettings(effort=effort).plateau_for()
+    assert LnsSettings(effort="fast", plateau=True).plateau_for()
+    assert not LnsSettings(plateau=False, **BUDGET).plateau_for()
+    p = price(generate_instance(6, 3, seed=1), 0.5)
+    for settings, flag in ((LnsSettings(**BUDGET), 1.0), (LnsSettings(effort="fast"), 0.0)):
+        search = _Search(p, settings, np.random.default_rng(0))
+        tour = search.first(None).best
+        assert search.trial_settings(tour, 1.0, 100, 100)[8] == flag
 
 
 def test_mirror_trial_starts_from_the_reversed_best(monkeypatch):

@@ -48,6 +48,31 @@ def test_remove_then_insert_is_a_tour(how):
         assert _feasible(p, new)
 
 
+@pytest.mark.parametrize("plateau", [False, True])
+def test_run_trial_plateau_moves(plateau):
+    """On costs that are all zero, every new tour costs what the current one does: at temperature
+    0 it replaces the current tour only with ``plateau`` (noisy insertions make new orders)."""
+    p, start, cluster_of = _problem(9, 3, 5)
+    edge, node = np.zeros_like(p.edge_cost), np.zeros(p.n_nodes)
+    near = kernels.neighbours(edge, start, p.n_clusters - 1)
+    t = _random_tour(p, np.random.default_rng(2))
+    cur, best, trial_best = t.copy(), t.copy(), t.copy()
+    costs = np.zeros(3)
+    counts = np.zeros(4, dtype=np.int64)
+    weights_r, weights_i = np.ones(len(kernels.REMOVALS)), np.ones(len(kernels.INSERTIONS))
+    settings = kernels.trial_settings(50, 50, 0.0, 0.0, 4, 1.0, 0.1, 0, plateau)
+    assert settings[8] == float(plateau)
+    kernels.seed(7)
+    seen = set()
+    for _ in range(50):
+        kernels.run_trial(cur, best, trial_best, costs, counts, weights_r, weights_i, settings, 1,
+                          edge, node, start, near, cluster_of, True)
+        assert _feasible(p, cur)
+        seen.add(tuple(cur.tolist()))
+    assert (len(seen) > 1) == plateau
+    assert np.array_equal(best, t) and np.array_equal(trial_best, t)  # no better tour exists
+
+
 def test_neighbours_are_nearest_first():
     """Each cluster's neighbour list excludes itself and is sorted by cluster distance."""
     p, start, _ = _problem(10, 3, 4)
