@@ -484,6 +484,17 @@ def _update_references(
                 changed.append(
                     f"{r.instance} omega {r.omega}: {None if old is None else old.value!r} -> {r.value!r}"
                 )
+            elif old.status != "optimal" and r.lower_bound is not None and (
+                old.lower_bound is None or r.lower_bound > old.lower_bound
+            ):  # no better tour, but a better proven bound: the row keeps its tour and source
+                if strictly_better(old.value, r.lower_bound):
+                    say(f"warning: {s.reference_path}: {r.instance} omega {r.omega}: a bound "
+                        f"{r.lower_bound!r} above the tour {old.value!r}; not written")
+                    continue
+                merged[(r.instance, r.omega)] = replace(old, lower_bound=r.lower_bound)
+                changed.append(
+                    f"{r.instance} omega {r.omega}: lower bound {old.lower_bound!r} -> {r.lower_bound!r}"
+                )
         if changed:
             write_reference(
                 s.reference_path, sorted(merged.values(), key=lambda r: (r.instance, r.omega or -1.0))

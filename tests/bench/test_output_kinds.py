@@ -157,6 +157,25 @@ def test_update_reference_keeps_the_omegas_a_set_holds(tmp_path):
     ref = read_reference(folder / "reference.csv")
     assert set(ref) == {("i1", 0.5)} and math.isclose(ref[("i1", 0.5)].value, r5.objective)
     assert any("not updated at omega 0.9" in m for m in said), said
+    # no better tour but a higher proven bound: the bound alone is written, the tour's row kept
+    kept = ref[("i1", 0.5)]
+    low = _rows(set="mine", omega=0.5, objective=r5.objective + 1, lower_bound=r5.objective - 2,
+                status="time_limit", **tour(r5))
+    OUTPUTS["update-references"](BENCHMARKS["exact-frontier-uav"], low, tmp_path, settings, said.append)
+    again = read_reference(folder / "reference.csv")[("i1", 0.5)]
+    assert math.isclose(again.lower_bound, r5.objective - 2)
+    assert (again.value, again.source, again.status) == (kept.value, kept.source, kept.status)
+    assert any("lower bound None ->" in m for m in said), said
+    # a lower one changes nothing
+    said.clear()
+    lower = low.assign(lower_bound=r5.objective - 3)
+    OUTPUTS["update-references"](BENCHMARKS["exact-frontier-uav"], lower, tmp_path, settings, said.append)
+    assert read_reference(folder / "reference.csv")[("i1", 0.5)] == again and not said
+    # a bound above the row's tour is a wrong solver's: said, not written
+    OUTPUTS["update-references"](BENCHMARKS["exact-frontier-uav"], low.assign(lower_bound=r5.objective + 0.5),
+                                 tmp_path, settings, said.append)
+    assert read_reference(folder / "reference.csv")[("i1", 0.5)] == again
+    assert any("above the tour" in m for m in said), said
     # the references benchmark fills a set's grid: it adds the point
     OUTPUTS["update-references"](BENCHMARKS["references"], df, tmp_path, settings, said.append)
     assert set(read_reference(folder / "reference.csv")) == {("i1", 0.5), ("i1", 0.9)}
