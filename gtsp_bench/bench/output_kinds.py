@@ -481,9 +481,9 @@ def _update_references(
                 if old is not None and old.lower_bound is not None:  # a bound holds whatever the tour
                     r = replace(r, lower_bound=max(old.lower_bound, r.lower_bound or old.lower_bound))
                 merged[(r.instance, r.omega)] = r
-                changed.append(
-                    f"{r.instance} omega {r.omega}: {None if old is None else old.value!r} -> {r.value!r}"
-                )
+                was = None if old is None else old.value
+                proof = " (proven optimal)" if r.status == "optimal" else ""
+                changed.append(f"{r.instance} omega {r.omega}: {was!r} -> {r.value!r}{proof}")
             elif old.status != "optimal" and r.lower_bound is not None and (
                 old.lower_bound is None or r.lower_bound > old.lower_bound
             ):  # no better tour, but a better proven bound: the row keeps its tour and source
