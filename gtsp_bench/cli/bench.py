@@ -59,7 +59,8 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                    metavar="KEY=VALUE",
                    help="solver option for every run (repeatable, as solve's -p; over a run's own "
                         "value, and named in its label: -s lns -p effort=fast gives 'lns "
-                        "effort=fast')")
+                        "effort=fast'); -p initial=best-known starts each GTSPLIB solve from "
+                        "its best-known tour (solvers that take an initial solution: lns)")
     g.add_argument("--clusters", "-K", metavar="K",
                    help="cluster counts to keep: a range 4..10, a list 4,7,10 or a mix 4..7,10")
     g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",
