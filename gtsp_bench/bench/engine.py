@@ -186,7 +186,6 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
         mine = {k: v for k, v in given.items() if takes is None or k in takes}
         if warm is not None and can_warm_start(r.solver):
             mine[WARM_START] = warm
-            used.add(WARM_START)
         used.update(mine)
         if not mine:
             out.append(r)
@@ -268,16 +267,15 @@ def plan(bench: Benchmark, settings: Settings) -> Plan:
     ) -> str:
         run_w = DISTANCE_OMEGA if w is None else w
         mine = dict(options)
-        initial = None
+        initial, keyed = None, options
         if mine.pop(WARM_START, None) is not None:
             if e.stem not in tours:
                 tours[e.stem] = best_known_tour(e)
             initial, tour_file = tours[e.stem]
             options = tuple(sorted(mine.items()))
             # the key names the tour file, so a shorter tour kept since starts new solves
-            key = task_key(e.stored, solver, run_w, seed, tl, (*options, (WARM_START, tour_file)))
-        else:
-            key = task_key(e.stored, solver, run_w, seed, tl, options)
+            keyed = (*options, (WARM_START, tour_file))
+        key = task_key(e.stored, solver, run_w, seed, tl, keyed)
         tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options, initial))
         return key
 
