@@ -349,7 +349,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             batched=True,
             repeats=3,
             outputs=("doc-learned",),
-            rough_time="45 min",
+            rough_time="30 min",
             quick={"sources": (Generated((4, 7), 20, seed=5000),), "repeats": 1, "outputs": ()},
         ),
         Benchmark(
