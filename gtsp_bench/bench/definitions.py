@@ -365,7 +365,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             batched=True,
             outputs=("doc-learned-transfer",),
             jobs=1,
-            rough_time="10 min",
+            rough_time="2 min",
             quick={"sources": (Committed(("uav-K50-N10-s1",), instances=2),
                                Gtsplib(names=("40kroa200",))), "outputs": ()},
         ),
