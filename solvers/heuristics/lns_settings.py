@@ -27,6 +27,8 @@ from gtsp_bench.solvers.heuristics.lns_islands import default_workers
 from gtsp_bench.checks import check_bool, check_choice, check_float, check_int
 from gtsp_bench.errors import InputError
 
+#: The share of the clusters a regional restart takes out, by default with effort ``budget``.
+REGIONAL = 0.3
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
 
@@ -94,6 +96,7 @@ class LnsSettings:
     effort: str | None = None
     mirror: bool | None = None
     plateau: bool | None = None
+    regional: float | None = None
 
     def __post_init__(self) -> None:
         # the options that may be None (the effort's or the instance's default): checked if given
@@ -131,6 +134,8 @@ class LnsSettings:
         check_int("path_iterations", self.path_iterations, 0)
         check_int("fail_passes", self.fail_passes, 0)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
+        if self.regional is not None:
+            check_float("regional", self.regional, 0.0, 1.0, open_low=False)
 
     @property
     def preset(self) -> Effort:
@@ -228,6 +233,13 @@ class LnsSettings:
         if self.plateau is not None:
             return self.plateau
         return not self.stops
+
+    def regional_for(self, n: int) -> int:
+        """Clusters a regional restart of a cycle of ``n`` clusters takes out (0: none, every
+        restart is cold): ``regional`` times ``n``, by default :data:`REGIONAL` with effort
+        ``budget`` and 0 otherwise."""
+        share = self.regional if self.regional is not None else (0.0 if self.stops else REGIONAL)
+        return 0 if share <= 0.0 else max(1, min(n - 1, round(share * n)))
 
     def patience_for(self, n: int) -> int:
         """Iterations without a new trial best that end a trial (default ``max(50, 5 n)`` with

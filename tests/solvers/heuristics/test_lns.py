@@ -188,6 +188,9 @@ def test_operators_are_all_used():
     ({"points": 1}, "points must be true or false"),
     ({"quadrants": "no"}, "quadrants must be true or false"),
     ({"workers": 0}, "workers must be an integer >= 1"),
+    ({"regional": -0.1}, "regional must be a number in \\[0, 1\\]"),
+    ({"regional": 1.5}, "regional must be a number in \\[0, 1\\]"),
+    ({"regional": "half"}, "regional must be a number"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -548,3 +551,47 @@ def test_mirror_trial_leaves_the_reversed_trap_on_35ftv170():
     on = get_solver("lns", mirror=True, **TWO_TRIALS)
     assert [run_solver(off, inst, None, seed=s).objective for s in (5, 16, 32)] == [1247.0] * 3
     assert {run_solver(on, inst, None, seed=s).objective for s in range(40)} == {1205.0}
+
+
+def test_regional_restarts_default_and_size():
+    """A regional restart takes out the given share of the clusters (at least 1, at most all but
+    one); the presets that stop never make one unless asked (the paper's runs keep their answers)."""
+    for effort in ("fast", "default", "slow"):
+        assert LnsSettings(effort=effort).regional_for(100) == 0
+    assert LnsSettings(effort="default", regional=0.25).regional_for(100) == 25
+    assert LnsSettings(regional=0.0, **BUDGET).regional_for(100) == 0
+    assert LnsSettings(regional=0.001, **BUDGET).regional_for(100) == 1
+    assert LnsSettings(regional=1.0, **BUDGET).regional_for(100) == 99
+
+
+def test_regional_restarts_alternate_with_cold_ones(monkeypatch):
+    """With ``regional`` every second restart starts from the regional tour of the best one: a
+    budget run with many restarts makes regional ones, and its answer is still a tour no better
+    than the DP optimum (at it here); without ``regional`` it makes none."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    for share, some in ((0.4, True), (0.0, False)):
+        solver = get_solver("lns", iterations=20, restart_after=1, regional=share, **BUDGET)
+        calls: list[int] = []
+        regional_tour = kernels.regional_tour
+
+        def spy(t, k, *args, calls=calls, regional_tour=regional_tour):
+            calls.append(k)
+            return regional_tour(t, k, *args)
+
+        monkeypatch.setattr(kernels, "regional_tour", spy)
+        r = run_solver(solver, inst, 0.5, seed=3, time_limit=0.3)
+        monkeypatch.undo()
+        assert bool(calls) == some
+        assert set(calls) <= {4}  # 0.4 of the 10 clusters (the depot's included)
+        assert r.objective >= optimum - 1e-9 * optimum
+        assert r.objective == pytest.approx(optimum, rel=1e-9)
+
+
+def test_regional_restarts_leave_stopping_efforts_alone():
+    """With effort ``default`` (which makes cold restarts) the run is the same whether
+    ``regional`` is left to its default or set to 0."""
+    inst = generate_instance(14, 4, seed=2)
+    runs = [run_solver(get_solver("lns", effort="default", **extra), inst, 0.4, seed=1)
+            for extra in ({}, {"regional": 0.0})]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
