@@ -443,7 +443,7 @@ class Lns:
         best tour, the cluster with the largest removal saving and the clusters whose heads are
         nearest it, this share of all, are taken out and put back by random insertion
         (:func:`~gtsp_bench.solvers.heuristics.lns_kernels.regional_tour`), then the local search
-        and trials as after a cold restart (default: 0.3 with effort ``budget``, else 0).
+        and trials as after a cold restart (default 0, off; the notes measure 0.3).
     """
 
     asymmetric = True

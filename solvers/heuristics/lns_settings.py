@@ -27,8 +27,6 @@ from gtsp_bench.solvers.heuristics.lns_islands import default_workers
 from gtsp_bench.checks import check_bool, check_choice, check_float, check_int
 from gtsp_bench.errors import InputError
 
-#: The share of the clusters a regional restart takes out, by default with effort ``budget``.
-REGIONAL = 0.3
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
 
@@ -236,9 +234,10 @@ class LnsSettings:
 
     def regional_for(self, n: int) -> int:
         """Clusters a regional restart of a cycle of ``n`` clusters takes out (0: none, every
-        restart is cold): ``regional`` times ``n``, by default :data:`REGIONAL` with effort
-        ``budget`` and 0 otherwise."""
-        share = self.regional if self.regional is not None else (0.0 if self.stops else REGIONAL)
+        restart is cold): ``regional`` times ``n``, by default 0 with every effort (0.3 with effort
+        ``budget`` improved the mean gap of the ``glns`` benchmark but gave a worse worst run,
+        ``docs/notes/2026-11-28-lns-regional-restart.md``)."""
+        share = self.regional if self.regional is not None else 0.0
         return 0 if share <= 0.0 else max(1, min(n - 1, round(share * n)))
 
     def patience_for(self, n: int) -> int:

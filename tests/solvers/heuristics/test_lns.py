@@ -555,8 +555,8 @@ def test_mirror_trial_leaves_the_reversed_trap_on_35ftv170():
 
 def test_regional_restarts_default_and_size():
     """A regional restart takes out the given share of the clusters (at least 1, at most all but
-    one); the presets that stop never make one unless asked (the paper's runs keep their answers)."""
-    for effort in ("fast", "default", "slow"):
+    one); no effort makes one unless asked (the committed runs keep their answers)."""
+    for effort in EFFORTS:
         assert LnsSettings(effort=effort).regional_for(100) == 0
     assert LnsSettings(effort="default", regional=0.25).regional_for(100) == 25
     assert LnsSettings(regional=0.0, **BUDGET).regional_for(100) == 0
