@@ -9,8 +9,9 @@ tour replaces the current one by simulated-annealing acceptance, cooling over a 
 trial starts from the greedy tour (or the warm start, the macro tour, or the best of a race of
 ``starts``) improved by the local search, later ones from the best tour so far; a trial that did
 not improve it makes the next one hotter, and after ``restart_after`` such trials the next starts
-cold from a random-insertion tour (with ``regional``, every second one from the best tour with the
-region around its dearest cluster re-planned); on asymmetric costs the second trial of a ``budget`` run starts
+cold from a random-insertion tour (with ``regional``, a restart after a chain that improved the
+best tour starts from it with the region around its dearest cluster re-planned); on asymmetric
+costs the second trial of a ``budget`` run starts
 from the best tour reversed (``mirror``). Above ``LARGE`` clusters the windowed re-opt and sampled
 removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`, quadrant neighbour lists, edge costs
 from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re-solves at the end
@@ -82,6 +83,14 @@ class _Run:
     timed_out: bool = False
     windows: int = 0  #: regions re-solved (``paths``, ``fail_passes``)
     window_saving: float = 0.0
+
+
+def restart_kind(regional: int, restarts: int, won: bool) -> str:
+    """The kind of a restart: ``"regional"`` (re-plan a region of the best tour) when ``regional``
+    is on, the run has restarted before and the chain that ends ``won`` (improved the run's best
+    tour); else ``"random"`` (cold, from a random-insertion tour). A run whose chains stop
+    improving its best restarts cold every time, so that one trapped in a basin can leave it."""
+    return "regional" if regional and restarts > 0 and won else "random"
 
 
 class _Search:
@@ -222,16 +231,16 @@ class _Search:
         # The second trial runs from the best tour reversed (asymmetric costs: trials keep a tour's
         # direction, and each direction can be its own basin); then the trials go on as before.
         mirror = s.mirror_for(self.symmetric) and not exact
-        regional, restarts = s.regional_for(n), 0  # clusters a regional restart re-plans
+        regional = s.regional_for(n)  # clusters a regional restart re-plans
+        restarts, mark = 0, run.best_cost  # restarts so far; the best when the last one came
         saved: tuple[np.ndarray, float, float, int] | None = None  # the base the mirror set aside
         while not exact and not (run.converged and (s.stops or deadline is None)):
             if is_past(deadline):
                 run.timed_out = True
                 break
             if cold and fails >= s.cold_after:
-                # Restarts alternate cold and regional (when ``regional`` is on), cold first.
-                kind = "regional" if regional and restarts % 2 == 1 else "random"
-                restarts += 1
+                kind = restart_kind(regional, restarts, run.best_cost < mark)
+                restarts, mark = restarts + 1, run.best_cost
                 fresh = kernels.regional_tour(run.best, regional, self.edge, self.node, self.start,
                                               self.near, self.cluster_of, self.symmetric) \
                     if kind == "regional" else self.start_tour("random", deadline)
@@ -439,9 +448,10 @@ class Lns:
         such as ``89rbg443``'s, the search can then drift along a plateau; else it is rejected,
         as before).
     regional
-        Every second restart is regional, not cold (in [0, 1]; 0: every restart cold): from the
-        best tour, the cluster with the largest removal saving and the clusters whose heads are
-        nearest it, this share of all, are taken out and put back by random insertion
+        A restart after a chain that improved the best tour (not the first restart) is regional,
+        not cold (in [0, 1]; 0: every restart cold; :func:`restart_kind`): from the best tour, the
+        cluster with the largest removal saving and the clusters whose heads are nearest it, this
+        share of all, are taken out and put back by random insertion
         (:func:`~gtsp_bench.solvers.heuristics.lns_kernels.regional_tour`), then the local search
         and trials as after a cold restart (default 0, off; the notes measure 0.3).
     """

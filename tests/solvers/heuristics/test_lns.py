@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.heuristics import lns as lns_module
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search, restart_kind
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
@@ -564,27 +565,44 @@ def test_regional_restarts_default_and_size():
     assert LnsSettings(regional=1.0, **BUDGET).regional_for(100) == 99
 
 
-def test_regional_restarts_alternate_with_cold_ones(monkeypatch):
-    """With ``regional`` every second restart starts from the regional tour of the best one: a
-    budget run with many restarts makes regional ones, and its answer is still a tour no better
-    than the DP optimum (at it here); without ``regional`` it makes none."""
+def test_restart_kind_is_regional_only_after_a_chain_that_won():
+    """A restart is regional only with ``regional`` on, after the run's first restart, and when
+    the chain that ends improved the run's best; every other restart is cold."""
+    assert restart_kind(30, 1, True) == restart_kind(30, 5, True) == "regional"
+    assert restart_kind(30, 0, True) == "random"  # the first restart is cold
+    assert restart_kind(30, 3, False) == "random"  # a chain that did not improve the best
+    assert restart_kind(0, 3, True) == "random"  # regional off
+
+
+def test_regional_restarts_come_only_after_a_chain_that_won(monkeypatch):
+    """A budget run whose first chain is at the DP optimum makes many restarts, none regional
+    (no later chain improves its best); when restart_kind says regional, the restart re-plans the
+    given share of the best tour, and the answer is still the optimum; without ``regional`` none."""
     inst = generate_instance(9, 3, seed=4)
     optimum = run_solver("dp", inst, 0.5).objective
-    for share, some in ((0.4, True), (0.0, False)):
+    kind_of = lns_module.restart_kind
+    for share, forced, some in ((0.4, False, False), (0.4, True, True), (0.0, True, False)):
         solver = get_solver("lns", iterations=20, restart_after=1, regional=share, **BUDGET)
         calls: list[int] = []
+        kinds: list[tuple[int, bool]] = []
         regional_tour = kernels.regional_tour
 
         def spy(t, k, *args, calls=calls, regional_tour=regional_tour):
             calls.append(k)
             return regional_tour(t, k, *args)
 
+        def spy_kind(regional, restarts, won, kinds=kinds, forced=forced):
+            kinds.append((restarts, won))
+            return kind_of(regional, restarts, won or (forced and restarts % 2 == 1))
+
         monkeypatch.setattr(kernels, "regional_tour", spy)
+        monkeypatch.setattr(lns_module, "restart_kind", spy_kind)
         r = run_solver(solver, inst, 0.5, seed=3, time_limit=0.3)
         monkeypatch.undo()
+        assert [restarts for restarts, _ in kinds] == list(range(len(kinds))) and len(kinds) > 10
+        assert not any(won for _, won in kinds[1:])  # the first chain found the best
         assert bool(calls) == some
         assert set(calls) <= {4}  # 0.4 of the 10 clusters (the depot's included)
-        assert r.objective >= optimum - 1e-9 * optimum
         assert r.objective == pytest.approx(optimum, rel=1e-9)
 
 
