@@ -9,7 +9,9 @@ tour replaces the current one by simulated-annealing acceptance, cooling over a 
 trial starts from the greedy tour (or the warm start, the macro tour, or the best of a race of
 ``starts``) improved by the local search, later ones from the best tour so far; a trial that did
 not improve it makes the next one hotter, and after ``restart_after`` such trials the next starts
-cold from a random-insertion tour; on asymmetric costs the second trial of a ``budget`` run starts
+cold from a random-insertion tour (with ``regional``, a restart after a chain that improved the
+best tour starts from it with the region around its dearest cluster re-planned); on asymmetric
+costs the second trial of a ``budget`` run starts
 from the best tour reversed (``mirror``). Above ``LARGE`` clusters the windowed re-opt and sampled
 removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`, quadrant neighbour lists, edge costs
 from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re-solves at the end
@@ -81,6 +83,14 @@ class _Run:
     timed_out: bool = False
     windows: int = 0  #: regions re-solved (``paths``, ``fail_passes``)
     window_saving: float = 0.0
+
+
+def restart_kind(regional: int, restarts: int, won: bool) -> str:
+    """The kind of a restart: ``"regional"`` (re-plan a region of the best tour) when ``regional``
+    is on, the run has restarted before and the chain that ends ``won`` (improved the run's best
+    tour); else ``"random"`` (cold, from a random-insertion tour). A run whose chains stop
+    improving its best restarts cold every time, so that one trapped in a basin can leave it."""
+    return "regional" if regional and restarts > 0 and won else "random"
 
 
 class _Search:
@@ -221,13 +231,20 @@ class _Search:
         # The second trial runs from the best tour reversed (asymmetric costs: trials keep a tour's
         # direction, and each direction can be its own basin); then the trials go on as before.
         mirror = s.mirror_for(self.symmetric) and not exact
+        regional = s.regional_for(n)  # clusters a regional restart re-plans
+        restarts, mark = 0, run.best_cost  # restarts so far; the best when the last one came
         saved: tuple[np.ndarray, float, float, int] | None = None  # the base the mirror set aside
         while not exact and not (run.converged and (s.stops or deadline is None)):
             if is_past(deadline):
                 run.timed_out = True
                 break
             if cold and fails >= s.cold_after:
-                base, base_cost = self.local_search(self.start_tour("random", deadline))
+                kind = restart_kind(regional, restarts, run.best_cost < mark)
+                restarts, mark = restarts + 1, run.best_cost
+                fresh = kernels.regional_tour(run.best, regional, self.edge, self.node, self.start,
+                                              self.near, self.cluster_of, self.symmetric) \
+                    if kind == "regional" else self.start_tour("random", deadline)
+                base, base_cost = self.local_search(fresh)
                 heat, fails = 1.0, 0
                 if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                     run.best, run.best_cost = base.copy(), base_cost
@@ -430,6 +447,13 @@ class Lns:
         ``exp(0) = 1``; default: with effort ``budget``, where on integer costs with many ties,
         such as ``89rbg443``'s, the search can then drift along a plateau; else it is rejected,
         as before).
+    regional
+        A restart after a chain that improved the best tour (not the first restart) is regional,
+        not cold (in [0, 1]; 0: every restart cold; :func:`restart_kind`): from the best tour, the
+        cluster with the largest removal saving and the clusters whose heads are nearest it, this
+        share of all, are taken out and put back by random insertion
+        (:func:`~gtsp_bench.solvers.heuristics.lns_kernels.regional_tour`), then the local search
+        and trials as after a cold restart (default 0, off; the notes measure 0.3).
     """
 
     asymmetric = True
@@ -448,7 +472,7 @@ class Lns:
         start_iterations: int = 5,
         paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
         fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
-        mirror: bool | None = None, plateau: bool | None = None,
+        mirror: bool | None = None, plateau: bool | None = None, regional: float | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
@@ -456,7 +480,7 @@ class Lns:
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, fail_passes, workers,
-                                    exchange, effort, mirror, plateau)
+                                    exchange, effort, mirror, plateau, regional)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

@@ -371,6 +371,34 @@ def random_insertion_tour(edge: np.ndarray, node: np.ndarray, start: np.ndarray,
 
 
 @njit(cache=True, nogil=True)
+def regional_tour(t: np.ndarray, k: int, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
+                  near: np.ndarray, cluster_of: np.ndarray, symmetric: bool) -> np.ndarray:
+    """A regional restart's tour from ``t``: the cluster with the largest removal saving (each
+    saving scaled by a random factor in [0.5, 1.5), as the ``worst`` removal does) and the
+    ``k - 1`` clusters whose heads are nearest its head (either direction) taken out, then put
+    back in random order, each at its cheapest place and head (random insertion, no noise).
+
+    On a tour whose one costly crossing (a far cluster, such as a pole) holds the clusters around
+    it in a poor order, this re-plans that region while keeping the rest of the tour.
+    """
+    n = len(t)
+    k = max(1, min(k, n - 1))
+    key = np.empty(n)
+    for i in range(n):
+        a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
+        key[i] = (ec(edge, a, u) + node[u] + ec(edge, u, b) - ec(edge, a, b)) * (0.5 + np.random.random())
+    s = int(np.argmax(key))
+    for i in range(n):
+        key[i] = min(ec(edge, t[s], t[i]), ec(edge, t[i], t[s]))
+    key[s] = -1.0
+    order = np.argsort(key, kind="mergesort")
+    drop = np.zeros(n, dtype=np.bool_)
+    for i in range(k):
+        drop[order[i]] = True
+    return insert(t[~drop], cluster_of[t[drop]], 2, 0.0, edge, node, start, near, cluster_of, symmetric)
+
+
+@njit(cache=True, nogil=True)
 def cluster_distances(edge: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``(k, k)``: the least ``ec(edge, i, j)`` from a node of each cluster to a node of each other
     (one pass over the matrix, row by row; on points, over squared distances, rounded once per
@@ -503,4 +531,5 @@ def warm_up() -> None:
         local_search(t.copy(), costs, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
         tour_cost(t, costs, node)
         random_insertion_tour(costs, node, start, near, cluster_of)
+        regional_tour(t, 3, costs, node, start, near, cluster_of, True)
     seed(0)

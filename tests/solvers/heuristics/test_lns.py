@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gtsp_bench.solvers.heuristics import lns as lns_module
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search
+from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search, restart_kind
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
@@ -188,6 +189,9 @@ def test_operators_are_all_used():
     ({"points": 1}, "points must be true or false"),
     ({"quadrants": "no"}, "quadrants must be true or false"),
     ({"workers": 0}, "workers must be an integer >= 1"),
+    ({"regional": -0.1}, "regional must be a number in \\[0, 1\\]"),
+    ({"regional": 1.5}, "regional must be a number in \\[0, 1\\]"),
+    ({"regional": "half"}, "regional must be a number"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid settings raise InputError naming the setting."""
@@ -548,3 +552,64 @@ def test_mirror_trial_leaves_the_reversed_trap_on_35ftv170():
     on = get_solver("lns", mirror=True, **TWO_TRIALS)
     assert [run_solver(off, inst, None, seed=s).objective for s in (5, 16, 32)] == [1247.0] * 3
     assert {run_solver(on, inst, None, seed=s).objective for s in range(40)} == {1205.0}
+
+
+def test_regional_restarts_default_and_size():
+    """A regional restart takes out the given share of the clusters (at least 1, at most all but
+    one); no effort makes one unless asked (the committed runs keep their answers)."""
+    for effort in EFFORTS:
+        assert LnsSettings(effort=effort).regional_for(100) == 0
+    assert LnsSettings(effort="default", regional=0.25).regional_for(100) == 25
+    assert LnsSettings(regional=0.0, **BUDGET).regional_for(100) == 0
+    assert LnsSettings(regional=0.001, **BUDGET).regional_for(100) == 1
+    assert LnsSettings(regional=1.0, **BUDGET).regional_for(100) == 99
+
+
+def test_restart_kind_is_regional_only_after_a_chain_that_won():
+    """A restart is regional only with ``regional`` on, after the run's first restart, and when
+    the chain that ends improved the run's best; every other restart is cold."""
+    assert restart_kind(30, 1, True) == restart_kind(30, 5, True) == "regional"
+    assert restart_kind(30, 0, True) == "random"  # the first restart is cold
+    assert restart_kind(30, 3, False) == "random"  # a chain that did not improve the best
+    assert restart_kind(0, 3, True) == "random"  # regional off
+
+
+def test_regional_restarts_come_only_after_a_chain_that_won(monkeypatch):
+    """A budget run whose first chain is at the DP optimum makes many restarts, none regional
+    (no later chain improves its best); when restart_kind says regional, the restart re-plans the
+    given share of the best tour, and the answer is still the optimum; without ``regional`` none."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    kind_of = lns_module.restart_kind
+    for share, forced, some in ((0.4, False, False), (0.4, True, True), (0.0, True, False)):
+        solver = get_solver("lns", iterations=20, restart_after=1, regional=share, **BUDGET)
+        calls: list[int] = []
+        kinds: list[tuple[int, bool]] = []
+        regional_tour = kernels.regional_tour
+
+        def spy(t, k, *args, calls=calls, regional_tour=regional_tour):
+            calls.append(k)
+            return regional_tour(t, k, *args)
+
+        def spy_kind(regional, restarts, won, kinds=kinds, forced=forced):
+            kinds.append((restarts, won))
+            return kind_of(regional, restarts, won or (forced and restarts % 2 == 1))
+
+        monkeypatch.setattr(kernels, "regional_tour", spy)
+        monkeypatch.setattr(lns_module, "restart_kind", spy_kind)
+        r = run_solver(solver, inst, 0.5, seed=3, time_limit=0.3)
+        monkeypatch.undo()
+        assert [restarts for restarts, _ in kinds] == list(range(len(kinds))) and len(kinds) > 10
+        assert not any(won for _, won in kinds[1:])  # the first chain found the best
+        assert bool(calls) == some
+        assert set(calls) <= {4}  # 0.4 of the 10 clusters (the depot's included)
+        assert r.objective == pytest.approx(optimum, rel=1e-9)
+
+
+def test_regional_restarts_leave_stopping_efforts_alone():
+    """With effort ``default`` (which makes cold restarts) the run is the same whether
+    ``regional`` is left to its default or set to 0."""
+    inst = generate_instance(14, 4, seed=2)
+    runs = [run_solver(get_solver("lns", effort="default", **extra), inst, 0.4, seed=1)
+            for extra in ({}, {"regional": 0.0})]
+    assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1

@@ -209,3 +209,44 @@ def test_a_second_process_loads_every_kernel_from_the_cache():
     subprocess.run(run, check=True, capture_output=True, text=True, timeout=600)
     second = subprocess.run(run, check=True, capture_output=True, text=True, timeout=600)
     assert second.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_regional_tour_replans_the_region_of_the_far_cluster():
+    """A cluster far from the rest has the largest removal saving whatever the random factor: the
+    regional tour takes it and the ``k - 1`` clusters whose heads are nearest it out and puts them
+    back, so every other cluster keeps its place in the cyclic order, and the result is a tour."""
+    p, start, cluster_of = _problem(16, 3, 6)
+    edge = p.edge_cost.copy()
+    far = 5  # every edge into or out of its nodes ten times as dear
+    nodes = np.arange(start[far], start[far + 1])
+    edge[nodes, :] *= 10.0
+    edge[:, nodes] *= 10.0
+    near = kernels.neighbours(edge, start, 4)
+    t = _random_tour(p, np.random.default_rng(4))
+    k = 6
+    centre = int(np.flatnonzero(cluster_of[t] == far)[0])
+    dist = np.minimum(edge[t[centre], t], edge[t, t[centre]])
+    dist[centre] = -1.0
+    dropped = set(cluster_of[t[np.argsort(dist, kind="mergesort")[:k]]].tolist())
+    assert far in dropped and len(dropped) == k
+    for s in range(5):
+        kernels.seed(s)
+        new = kernels.regional_tour(t, k, edge, p.node_cost, start, near, cluster_of, True)
+        assert _feasible(p, new)
+        kept = [c for c in cluster_of[t].tolist() if c not in dropped]
+        order = [c for c in cluster_of[new].tolist() if c not in dropped]
+        i = order.index(kept[0])
+        assert order[i:] + order[:i] == kept  # the same cycle, the same direction
+        kept_heads = {int(v) for v in t if cluster_of[v] not in dropped}
+        assert kept_heads <= set(new.tolist())  # and their heads
+
+
+def test_regional_tour_bounds_its_removals():
+    """Any ``k`` (0, or more than the cycle holds) still gives a tour."""
+    p, start, cluster_of = _problem(8, 3, 1)
+    near = kernels.neighbours(p.edge_cost, start, 3)
+    t = _random_tour(p, np.random.default_rng(0))
+    kernels.seed(1)
+    for k in (0, 1, 7, 8, 50):
+        assert _feasible(p, kernels.regional_tour(t, k, p.edge_cost, p.node_cost, start, near,
+                                                  cluster_of, True))
