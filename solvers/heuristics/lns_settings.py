@@ -235,7 +235,8 @@ class LnsSettings:
     def regional_for(self, n: int) -> int:
         """Clusters a regional restart of a cycle of ``n`` clusters takes out (0: none, every
         restart is cold): ``regional`` times ``n``, by default 0 with every effort (0.3 with effort
-        ``budget`` improved the mean gap of the ``glns`` benchmark but gave a worse worst run,
+        ``budget``, restarts alternating, improved the mean gap of the ``glns`` benchmark but gave
+        a worse worst run; the rule of :func:`~.lns.restart_kind` was probed on four files only:
         ``docs/notes/2026-11-28-lns-regional-restart.md``)."""
         share = self.regional if self.regional is not None else 0.0
         return 0 if share <= 0.0 else max(1, min(n - 1, round(share * n)))
