@@ -46,6 +46,19 @@ def seed(value: int) -> None:
 
 # ---------------------------------------------------------------------- removal
 @njit(cache=True, nogil=True)
+def scaled_savings(t: np.ndarray, edge: np.ndarray, node: np.ndarray) -> np.ndarray:
+    """Per position of ``t``, what taking its cluster out saves (its two edges and its node cost,
+    less the edge that closes the gap), times a random factor in [0.5, 1.5): the ``worst``
+    removal's key, and where a regional restart centres."""
+    n = len(t)
+    key = np.empty(n)
+    for i in range(n):
+        a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
+        key[i] = (ec(edge, a, u) + node[u] + ec(edge, u, b) - ec(edge, a, b)) * (0.5 + np.random.random())
+    return key
+
+
+@njit(cache=True, nogil=True)
 def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) -> np.ndarray:
     """A mask of the ``k`` positions of ``t`` to take out (``how`` indexes :data:`REMOVALS`)."""
     n = len(t)
@@ -55,12 +68,7 @@ def remove(t: np.ndarray, k: int, how: int, edge: np.ndarray, node: np.ndarray) 
         for i in range(k):
             drop[perm[i]] = True
     elif how == 1:  # worst: largest saving, each scaled by a random factor in [0.5, 1.5)
-        key = np.empty(n)
-        for i in range(n):
-            a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
-            key[i] = -(ec(edge, a, u) + node[u] + ec(edge, u, b)
-                       - ec(edge, a, b)) * (0.5 + np.random.random())
-        order = np.argsort(key)
+        order = np.argsort(-scaled_savings(t, edge, node))
         for i in range(k):
             drop[order[i]] = True
     elif how == 2:  # segment
@@ -383,11 +391,8 @@ def regional_tour(t: np.ndarray, k: int, edge: np.ndarray, node: np.ndarray, sta
     """
     n = len(t)
     k = max(1, min(k, n - 1))
+    s = int(np.argmax(scaled_savings(t, edge, node)))
     key = np.empty(n)
-    for i in range(n):
-        a, u, b = t[(i - 1) % n], t[i], t[(i + 1) % n]
-        key[i] = (ec(edge, a, u) + node[u] + ec(edge, u, b) - ec(edge, a, b)) * (0.5 + np.random.random())
-    s = int(np.argmax(key))
     for i in range(n):
         key[i] = min(ec(edge, t[s], t[i]), ec(edge, t[i], t[s]))
     key[s] = -1.0
