@@ -27,8 +27,10 @@ from gtsp_bench.errors import InputError
 
 def keep_hint(better: pd.DataFrame, command: str) -> str:
     """What a run without ``--update-reference`` says of its solves below a best-known value
-    (``better``: their rows): how many, of how many files, and the command that keeps them."""
+    (``better``: their rows): how many, of how many files, and the command that keeps them
+    (the run's own, without ``--fresh``: with it the rerun would solve everything again)."""
     files = better["instance"].nunique()
+    command = " ".join(w for w in command.split() if w != "--fresh")
     again = f"`{command} --update-reference`" if command else "the same command with --update-reference"
     return (f"{len(better)} solve(s) of {files} file(s) went below the best-known value; {again} "
             "keeps their tours (GTSPLIB: best_known.csv and tours/ of the library; a set: its "

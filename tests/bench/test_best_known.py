@@ -125,3 +125,11 @@ def test_rows_of_a_library_copy_go_to_that_copy(tmp_path, monkeypatch):
     assert set(got[(tmp_path / "copy").resolve()]["set"]) == {"copy"}
     monkeypatch.setenv(gtsplib.ENV_VAR, str(tmp_path / "absent"))
     assert list(libraries(df, settings)) == [(tmp_path / "copy").resolve()]
+
+
+def test_keep_hint_drops_fresh_so_the_rerun_reuses_the_solves():
+    """A run made with --fresh is told to rerun without it: --fresh would solve everything again."""
+    better = pd.DataFrame({"instance": ["464u2319"]})
+    hint = keep_hint(better, "gtsp-bench bench glns-large --seeds 1 --fresh --no-progress")
+    assert "`gtsp-bench bench glns-large --seeds 1 --no-progress --update-reference`" in hint
+    assert "--fresh" not in hint
