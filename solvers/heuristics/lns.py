@@ -308,8 +308,8 @@ class _Search:
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
                 if s.fail_passes and self.windowed:  # re-solve the base's regions
-                    saved = self.polish(run, base, deadline, rng, s.fail_passes)
-                    if saved > 0.0:
+                    gain = self.polish(run, base, deadline, rng, s.fail_passes)
+                    if gain > 0.0:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
                             run.best, run.best_cost = base.copy(), base_cost

@@ -229,6 +229,21 @@ def test_fail_passes_on_a_large_cycle():
     assert r.stats["windows"] > 0
 
 
+def test_fail_passes_then_more_trials():
+    """A trial after a failed one's region pass runs on: the pass's saving is not taken for the
+    mirror trial's saved state (it was, and the next trial's end raised a TypeError). A budget
+    run of 2 s has many trials after failed ones."""
+    n = LARGE + 20
+    inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+    r = run_solver(get_solver("lns", fail_passes=1, path_clusters=40, path_iterations=1,
+                              iterations=100, effort="budget", workers=1), inst, 0.5,
+                   time_limit=2.0, seed=1)
+    assert r.status == "feasible" and r.stats["trials"] > 3
+    assert sorted(r.order) == list(range(n))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert r.stats["windows"] > 0
+
+
 def test_paths_leave_small_instances_alone():
     """Up to LARGE clusters paths has no effect: the same run as without, never below the DP's
     proven optimum."""
