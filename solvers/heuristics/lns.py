@@ -123,14 +123,9 @@ class _Search:
             self.near = kernels.neighbours(self.edge, self.start, count, self.centre)
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
-        #: The regions of the end phase and ``fail_passes`` (:meth:`polish`).
-        self.regions = Regions(self.near, self.centre) if self.windowed else None
-
-    @property
-    def windowed(self) -> bool:
-        """Whether region re-solves apply (``paths``, ``fail_passes``): above ``LARGE``
-        clusters, on symmetric costs."""
-        return self.p.n_clusters > LARGE and self.symmetric
+        #: The regions of the end phase (above ``LARGE`` clusters) and of ``fail_passes`` (any
+        #: size): symmetric costs only (:meth:`polish`).
+        self.regions = Regions(self.near, self.centre) if self.symmetric else None
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
@@ -307,7 +302,7 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.fail_passes and self.windowed:  # re-solve the base's regions
+                if s.fail_passes and self.regions is not None:  # re-solve the base's regions
                     gain = self.polish(run, base, deadline, rng, s.fail_passes)
                     if gain > 0.0:
                         base_cost = p.tour_cost(base)
@@ -430,8 +425,8 @@ class Lns:
         ``path_iterations`` (>= 0, default 5) iterations per cluster
         (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
-        Passes of region re-solves over the start of each trial that did not improve it (above
-        ``LARGE`` clusters, symmetric costs; >= 0, default 0).
+        Passes of region re-solves over the start of each trial that did not improve it
+        (symmetric costs, any size; >= 0, default 0).
     workers, exchange
         Threads of a timed search above ``LARGE`` clusters with effort ``budget`` (>= 1;
         default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as

@@ -256,6 +256,22 @@ def test_paths_leave_small_instances_alone():
     assert runs[0].objective >= optimum - 1e-9 * optimum
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_fail_passes_on_a_small_cycle_never_below_dp_optimum(seed):
+    """fail_passes works at any size on symmetric costs: on K = 12 its region re-solves run
+    (windows counted) and the tour is valid, priced as the evaluator prices it, and never below
+    the DP's proven optimum."""
+    inst = generate_instance(12, 3, seed=8)
+    r = run_solver(get_solver("lns", fail_passes=2, path_clusters=6, path_iterations=2,
+                              iterations=10, trials=8, stop_at_convergence=True), inst, 0.5,
+                   seed=seed)
+    assert r.stats["windows"] > 0
+    assert sorted(r.order) == list(range(12))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    optimum = run_solver("dp", inst, 0.5).objective
+    assert r.objective >= optimum - 1e-9 * optimum
+
+
 @pytest.mark.parametrize("options, message", [
     ({"paths": 1.5}, "paths must be a number in"),
     ({"path_clusters": 1}, "path_clusters must be an integer >= 2"),
