@@ -124,8 +124,9 @@ class _Search:
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
         #: The regions of the end phase (above ``LARGE`` clusters) and of ``fail_passes`` (any
-        #: size): symmetric costs only (:meth:`polish`).
-        self.regions = Regions(self.near, self.centre) if self.symmetric else None
+        #: size): symmetric costs only (:meth:`polish`); none where neither can run.
+        wanted = self.symmetric and (n > LARGE or settings.fail_passes > 0)
+        self.regions = Regions(self.near, self.centre) if wanted else None
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
         t = np.array(t, dtype=np.int64)
