@@ -123,9 +123,11 @@ class _Search:
             self.near = kernels.neighbours(self.edge, self.start, count, self.centre)
         self.max_remove = max(1, min(n - 2, settings.max_removals_for(n),
                                      math.ceil(settings.remove_fraction * n)))
-        #: The regions of the end phase (above ``LARGE`` clusters) and of ``fail_passes`` (any
-        #: size): symmetric costs only (:meth:`polish`); none where neither can run.
-        wanted = self.symmetric and (n > LARGE or settings.fail_passes > 0)
+        #: Passes of region re-solves after a failed trial (``fail_passes``; 0 on directed costs).
+        self.fail_passes = settings.fail_passes_for(n, self.symmetric)
+        #: The regions of the end phase (above ``LARGE`` clusters) and of ``fail_passes``:
+        #: symmetric costs only (:meth:`polish`); none where neither can run.
+        wanted = self.symmetric and (n > LARGE or self.fail_passes > 0)
         self.regions = Regions(self.near, self.centre) if wanted else None
 
     def local_search(self, t: np.ndarray) -> tuple[np.ndarray, float]:
@@ -303,8 +305,8 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.fail_passes and self.regions is not None:  # re-solve the base's regions
-                    gain = self.polish(run, base, deadline, rng, s.fail_passes)
+                if self.fail_passes and self.regions is not None:  # re-solve the base's regions
+                    gain = self.polish(run, base, deadline, rng, self.fail_passes)
                     if gain > 0.0:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
@@ -427,7 +429,8 @@ class Lns:
         (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
         Passes of region re-solves over the start of each trial that did not improve it
-        (symmetric costs, any size; >= 0, default 0).
+        (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``LARGE``
+        clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`).
     workers, exchange
         Threads of a timed search above ``LARGE`` clusters with effort ``budget`` (>= 1;
         default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
@@ -467,7 +470,7 @@ class Lns:
         macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
         start_iterations: int = 5,
         paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
-        fail_passes: int = 0, workers: int | None = None, exchange: float = 0.5,
+        fail_passes: int | None = None, workers: int | None = None, exchange: float = 0.5,
         mirror: bool | None = None, plateau: bool | None = None, regional: float | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,

@@ -16,6 +16,7 @@ from gtsp_bench.solvers.heuristics.lns_paths import (
     path_cost,
     region_passes,
 )
+from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
 from gtsp_bench.energy import evaluate
@@ -175,8 +176,9 @@ def test_region_passes_never_make_the_tour_worse():
 def test_default_run_ends_with_regions_above_large():
     """With effort ``budget`` a time-limited run above LARGE clusters keeps the end of its budget for region
     re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
-    with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off."""
-    assert LnsSettings().fail_passes == 0
+    with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off
+    above LARGE."""
+    assert LnsSettings(effort="budget").fail_passes_for(LARGE + 20, True) == 0
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     r = run_solver(get_solver("lns", effort="budget"), inst, 0.5, seed=1, time_limit=3.0)
@@ -202,6 +204,39 @@ def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
     """The end phase's share: ``paths`` (default 0.3) above LARGE clusters on symmetric costs in
     a time-limited run with effort ``budget``, else none."""
     assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
+
+
+@pytest.mark.parametrize("n, symmetric, options, passes", [
+    (FAIL_FROM, True, {"effort": "budget"}, 1),
+    (LARGE, True, {"effort": "budget"}, 1),
+    (FAIL_FROM - 1, True, {"effort": "budget"}, 0),  # below FAIL_FROM: off by default
+    (LARGE + 1, True, {"effort": "budget"}, 0),  # above LARGE: the end phase instead
+    (FAIL_FROM, True, {}, 0),  # the default effort stops after its trials: off
+    (FAIL_FROM, True, {"effort": "slow"}, 0),
+    (FAIL_FROM, True, {"stop_at_convergence": False}, 1),  # effort budget by its old name
+    (FAIL_FROM, False, {"effort": "budget"}, 0),  # directed costs: never
+    (FAIL_FROM, False, {"fail_passes": 2}, 0),
+    (12, True, {"fail_passes": 2}, 2),  # given: at any size on symmetric costs
+    (FAIL_FROM, True, {"effort": "budget", "fail_passes": 0}, 0),
+])
+def test_fail_passes_by_size(n, symmetric, options, passes):
+    """Region passes after a failed trial: ``fail_passes`` on symmetric costs, by default 1 from
+    FAIL_FROM to LARGE clusters with effort ``budget``, else 0."""
+    assert LnsSettings(**options).fail_passes_for(n, symmetric) == passes
+
+
+@pytest.mark.parametrize("n, passes", [(FAIL_FROM - 2, False), (FAIL_FROM - 1, True)])
+def test_budget_runs_fail_passes_from_fail_from(n, passes):
+    """A budget run on a cycle of FAIL_FROM clusters (K = FAIL_FROM - 1 and the base station)
+    re-solves regions after its failed trials by default (windows counted in its stats), one of
+    a cluster fewer does not; both give a valid tour priced as the evaluator prices it (short
+    trials, so that some fail)."""
+    inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
+    r = run_solver(get_solver("lns", effort="budget", iterations=100, path_clusters=40,
+                              path_iterations=1), inst, 0.5, seed=1, time_limit=1.5)
+    assert ("windows" in r.stats and r.stats["windows"] > 0) == passes
+    assert sorted(r.order) == list(range(n))
+    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
 def test_paths_option_on_a_large_cycle():
