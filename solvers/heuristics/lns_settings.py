@@ -216,9 +216,9 @@ class LnsSettings:
         cycle of ``n`` clusters: ``fail_passes`` on symmetric costs (0 on directed ones: the
         regions are symmetric sub-problems), by default 1 from ``FAIL_FROM`` to ``LARGE`` clusters
         with effort ``budget``, else 0. On GLNS's 45 files (ten seeds) a pass took 207si1032 to
-        its best known for the first time and gained on every file of 200 clusters and more, and
-        lost on the smaller 134gr666; above ``LARGE`` it was better on some large files and worse
-        on others (``docs/notes/2026-11-28-fail-passes-from-200.md``)."""
+        its best known for the first time and gained on four of the five files of 200 clusters
+        and more, and lost on the smaller 134gr666; above ``LARGE`` it was better on some large
+        files and worse on others (``docs/notes/2026-11-28-fail-passes-from-200.md``)."""
         if not symmetric:
             return 0
         if self.fail_passes is not None:
