@@ -448,11 +448,13 @@ BENCHMARKS: dict[str, Benchmark] = {
             omegas=(0.0, 0.5, 0.9),
             budget=Budget(600.0),
             reference=Reference(own_proofs=True),
+            outputs=("doc-exact-frontier-uav",),
             jobs=1,
             rough_time="3 h",
             quick={
                 "sources": (Committed(("uav-K100-N20-s1",), 1),),
                 "omegas": (0.9,),
+                "outputs": (),
             },
         ),
         Benchmark(

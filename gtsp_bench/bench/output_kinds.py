@@ -6,7 +6,8 @@ rows alone: ``(benchmark, rows, out_dir, settings, say) -> files written``.
 ``glns``
     ``glns.md``: per instance, lns's mean gap, hits and worst run beside GLNS's published numbers
     (``glns-45.csv``), and the three target lines;
-``doc-heuristics``, ``doc-learned``, ``doc-learned-transfer``, ``doc-exact-scale``, ``doc-textbook``
+``doc-heuristics``, ``doc-learned``, ``doc-learned-transfer``, ``doc-exact-scale``,
+``doc-exact-frontier-uav``, ``doc-textbook``
     a generated block of a documentation page (:data:`DOC_BLOCKS`), refreshed only when the run
     wrote into the committed folder ``results/NAME`` of a checkout (``docs/`` beside it);
 ``update-references``
@@ -193,7 +194,8 @@ def transfer_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
 
 
 def exact_scale_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
-    """The exact page's table at scale: a line per set, a column per solver."""
+    """The exact page's tables at scale (``exact-scale``, ``exact-frontier-uav``): a line per
+    set, a column per solver."""
     return (
         f"{_made_by(bench, df, command)}\n\n"
         f"{pivot_markdown(df, 'set', 'label', proof_cell, 'set')}\n\n"
@@ -259,6 +261,8 @@ DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
     "doc-learned": ("docs/solvers/learned.md", "learned-table", learned_block),
     "doc-learned-transfer": ("docs/solvers/learned.md", "learned-transfer-table", transfer_block),
     "doc-exact-scale": ("docs/solvers/exact.md", "exact-scale-table", exact_scale_block),
+    "doc-exact-frontier-uav": ("docs/solvers/exact.md", "exact-frontier-uav-table",
+                               exact_scale_block),
     "doc-textbook": ("docs/solvers/exact.md", "textbook-table", textbook_block),
     "doc-glns": ("docs/solvers/heuristics.md", "glns-targets", glns_targets_block),
     "doc-glns-large": ("docs/solvers/heuristics.md", "glns-large-targets", glns_targets_block),
