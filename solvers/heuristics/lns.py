@@ -429,8 +429,8 @@ class Lns:
         (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
         Passes of region re-solves over the start of each trial that did not improve it
-        (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``LARGE``
-        clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`).
+        (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``FAIL_TO``
+        (1,500) clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`).
     workers, exchange
         Threads of a timed search above ``LARGE`` clusters with effort ``budget`` (>= 1;
         default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as

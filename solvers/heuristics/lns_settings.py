@@ -11,8 +11,8 @@ An effort preset, in the spirit of GLNS's modes, says when the search ends (:dat
     the same with more trials and more patience before a cold restart;
 ``budget``
     go on until the time limit: trials fitted to it, cold restarts, two threads and region
-    re-solves after a failed trial from ``FAIL_FROM`` to ``LARGE`` clusters, and at the end above
-    (the fixed-budget benchmarks run this).
+    re-solves after a failed trial from ``FAIL_FROM`` to ``FAIL_TO`` clusters, and at the end above
+    ``LARGE`` (the fixed-budget benchmarks run this).
 
 With the first three the time limit is a cap, not a target. ``trials`` and ``restart_after``
 given explicitly win over the preset's.
@@ -30,9 +30,10 @@ from gtsp_bench.errors import InputError
 
 #: Above this many clusters an iteration removes at most 25 of them by default (100 up to it).
 LARGE = 400
-#: From this many clusters up to ``LARGE``, effort ``budget`` re-solves regions after a failed
-#: trial by default (:meth:`LnsSettings.fail_passes_for`).
+#: From ``FAIL_FROM`` up to ``FAIL_TO`` clusters, effort ``budget`` re-solves regions after a
+#: failed trial by default (:meth:`LnsSettings.fail_passes_for`).
 FAIL_FROM = 200
+FAIL_TO = 1500
 
 
 @dataclass(frozen=True)
@@ -214,16 +215,17 @@ class LnsSettings:
     def fail_passes_for(self, n: int, symmetric: bool) -> int:
         """Passes of region re-solves over the start of a trial that did not improve it, on a
         cycle of ``n`` clusters: ``fail_passes`` on symmetric costs (0 on directed ones: the
-        regions are symmetric sub-problems), by default 1 from ``FAIL_FROM`` to ``LARGE`` clusters
-        with effort ``budget``, else 0. On GLNS's 45 files (ten seeds) a pass took 207si1032 to
-        its best known for the first time and gained on four of the five files of 200 clusters
-        and more, and lost on the smaller 134gr666; above ``LARGE`` it was better on some large
-        files and worse on others (``docs/notes/2026-11-28-fail-passes-from-200.md``)."""
+        regions are symmetric sub-problems), by default 1 from ``FAIL_FROM`` to ``FAIL_TO``
+        clusters with effort ``budget``, else 0. On GLNS's 45 files (ten seeds) a pass took
+        207si1032 to its best known for the first time and gained on four of the five files of 200
+        clusters and more, and lost on the smaller 134gr666; on the large files at 60 s it gained
+        on most files up to 1,480 clusters and lost on those of 2,000 and 2,811
+        (``docs/notes/2026-11-28-fail-passes-from-200.md``)."""
         if not symmetric:
             return 0
         if self.fail_passes is not None:
             return self.fail_passes
-        return 1 if FAIL_FROM <= n <= LARGE and not self.stops else 0
+        return 1 if FAIL_FROM <= n <= FAIL_TO and not self.stops else 0
 
     def workers_for(self, n: int, timed: bool) -> int:
         """Threads searching a cycle of ``n`` clusters: ``workers`` (default
@@ -268,4 +270,4 @@ class LnsSettings:
         return max(50, 5 * n) if self.stops else self.iterations_for(n)
 
 
-__all__ = ["EFFORTS", "FAIL_FROM", "LARGE", "Effort", "LnsSettings"]
+__all__ = ["EFFORTS", "FAIL_FROM", "FAIL_TO", "LARGE", "Effort", "LnsSettings"]

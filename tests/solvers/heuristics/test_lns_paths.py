@@ -16,7 +16,7 @@ from gtsp_bench.solvers.heuristics.lns_paths import (
     path_cost,
     region_passes,
 )
-from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM
+from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, FAIL_TO
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
 from gtsp_bench.energy import evaluate
@@ -176,12 +176,12 @@ def test_region_passes_never_make_the_tour_worse():
 def test_default_run_ends_with_regions_above_large():
     """With effort ``budget`` a time-limited run above LARGE clusters keeps the end of its budget for region
     re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
-    with ``stop_at_convergence`` it stops after its trials, without them; ``fail_passes`` is off
-    above LARGE."""
-    assert LnsSettings(effort="budget").fail_passes_for(LARGE + 20, True) == 0
+    with ``stop_at_convergence`` it stops after its trials, without them. ``fail_passes`` is set
+    to 0 so that the windows counted are the end phase's."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", effort="budget"), inst, 0.5, seed=1, time_limit=3.0)
+    r = run_solver(get_solver("lns", effort="budget", fail_passes=0), inst, 0.5, seed=1,
+                   time_limit=3.0)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
@@ -209,8 +209,10 @@ def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
 @pytest.mark.parametrize("n, symmetric, options, passes", [
     (FAIL_FROM, True, {"effort": "budget"}, 1),
     (LARGE, True, {"effort": "budget"}, 1),
+    (LARGE + 1, True, {"effort": "budget"}, 1),  # beside the end phase above LARGE
+    (FAIL_TO, True, {"effort": "budget"}, 1),
     (FAIL_FROM - 1, True, {"effort": "budget"}, 0),  # below FAIL_FROM: off by default
-    (LARGE + 1, True, {"effort": "budget"}, 0),  # above LARGE: the end phase instead
+    (FAIL_TO + 1, True, {"effort": "budget"}, 0),  # above FAIL_TO: off by default
     (FAIL_FROM, True, {}, 0),  # the default effort stops after its trials: off
     (FAIL_FROM, True, {"effort": "slow"}, 0),
     (FAIL_FROM, True, {"stop_at_convergence": False}, 1),  # effort budget by its old name
@@ -221,7 +223,7 @@ def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
 ])
 def test_fail_passes_by_size(n, symmetric, options, passes):
     """Region passes after a failed trial: ``fail_passes`` on symmetric costs, by default 1 from
-    FAIL_FROM to LARGE clusters with effort ``budget``, else 0."""
+    FAIL_FROM to FAIL_TO clusters with effort ``budget``, else 0."""
     assert LnsSettings(**options).fail_passes_for(n, symmetric) == passes
 
 
