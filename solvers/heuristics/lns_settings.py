@@ -10,9 +10,9 @@ An effort preset, in the spirit of GLNS's modes, says when the search ends (:dat
 ``slow``
     the same with more trials and more patience before a cold restart;
 ``budget``
-    go on until the time limit: trials fitted to it, cold restarts, two threads and region
-    re-solves after a failed trial from ``FAIL_FROM`` to ``FAIL_TO`` clusters, and at the end above
-    ``LARGE`` (the fixed-budget benchmarks run this).
+    go on until the time limit: trials fitted to it, cold restarts, region re-solves after a
+    failed trial from ``FAIL_FROM`` to ``FAIL_TO`` clusters, and above ``LARGE`` two threads and
+    region re-solves at the end (the fixed-budget benchmarks run this).
 
 With the first three the time limit is a cap, not a target. ``trials`` and ``restart_after``
 given explicitly win over the preset's.
