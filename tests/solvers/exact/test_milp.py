@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.milp import Milp
-from gtsp_bench.solvers.exact.mip import columns
+from gtsp_bench.solvers.exact.mip import backends, branch_cut, columns
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -78,6 +78,26 @@ def test_every_path_is_exact(options, seed):
     r = run_solver(Milp(**options), inst, 0.3)
     assert r.status == "optimal"
     assert r.objective == pytest.approx(brute.objective, rel=1e-9)
+
+
+@pytest.mark.parametrize("big_from, root_age", [(0, branch_cut.BIG_ROOT_PURGE_AGE),
+                                                 (branch_cut.BIG_ROOT_NODES, branch_cut.ROOT_PURGE_AGE)])
+@pytest.mark.parametrize("seed", range(3))
+def test_root_purge_age_by_model_size(monkeypatch, big_from, root_age, seed):
+    """The root purges slack cuts after BIG_ROOT_PURGE_AGE optima on a model of at least
+    BIG_ROOT_NODES nodes (here forced on a K = 8 one), else after ROOT_PURGE_AGE; the node loop
+    after NODE_PURGE_AGE. Either way the dp optimum is proven."""
+    monkeypatch.setattr(branch_cut, "BIG_ROOT_NODES", big_from)
+    ages: list[int] = []
+    purge = backends.LpModel.purge
+    monkeypatch.setattr(backends.LpModel, "purge",
+                        lambda lp, values, age: (ages.append(age), purge(lp, values, age))[1])
+    inst = generate_instance(8, 4, seed=seed)
+    r = run_solver(Milp(root_rounds=3, lns_trials=0), inst, 0.5)
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
+    assert ages and ages[0] == root_age
+    assert set(ages) <= {root_age, branch_cut.NODE_PURGE_AGE}
 
 
 def test_branch_and_cut_runs_and_agrees_with_dp():
