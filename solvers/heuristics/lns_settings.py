@@ -220,7 +220,8 @@ class LnsSettings:
         207si1032 to its best known for the first time and gained on four of the five files of 200
         clusters and more, and lost on the smaller 134gr666; on the large files at 60 s it gained
         on most files up to 1,480 clusters and lost on those of 2,000 and 2,811
-        (``docs/notes/2026-11-28-fail-passes-from-200.md``)."""
+        (``docs/notes/2026-11-28-fail-passes-from-200.md`` and
+        ``2026-11-28-passes-to-1500-and-root-purge.md``)."""
         if not symmetric:
             return 0
         if self.fail_passes is not None:
