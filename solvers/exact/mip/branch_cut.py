@@ -65,7 +65,8 @@ ROOT_PURGE_AGE, NODE_PURGE_AGE = 3, 10
 #: was slack at ``BIG_ROOT_PURGE_AGE`` optima: there an LP costs thousands of simplex iterations a
 #: round (UAV K = 100, about 1,700 nodes: the certified gap at 150 s fell on 9 of 9 points, mean
 #: 0.373 -> 0.299 %), where on GTSPLIB up to 442 nodes the root loop took more rounds and most
-#: proofs took longer (45ts225 37 -> 46 s). UAV K = 50 has 730-910 nodes.
+#: proofs took longer (45ts225 37 -> 46 s). UAV K = 50 has 730-910 nodes. Such a root also drops
+#: edge columns priced out for long (:func:`columns.drop_root_stale`).
 BIG_ROOT_NODES, BIG_ROOT_PURGE_AGE = 1200, 1
 
 
@@ -233,7 +234,9 @@ class _Search:
         """Root LP loop: price columns in, bound, fix by reduced cost, separate; whether it
         paused at ``until`` (a ``time.perf_counter()`` time) before it finished."""
         model, lp = self.model, self.lp
-        purge_age = BIG_ROOT_PURGE_AGE if model.n_nodes >= BIG_ROOT_NODES else ROOT_PURGE_AGE
+        big = model.n_nodes >= BIG_ROOT_NODES
+        purge_age = BIG_ROOT_PURGE_AGE if big else ROOT_PURGE_AGE
+        dropped = np.zeros(model.n_cols, dtype=bool)  # columns this loop took out of the LP
         history: list[float] = []
         bounds: list[float] = []
         rounds = 0
@@ -248,7 +251,9 @@ class _Search:
             present[lp.cols] = True
             absent = ~present & ~self.fixed
             if res.status == "infeasible" and absent.any():  # the core was too small
-                lp.add_cols(np.flatnonzero(absent))
+                back = absent & dropped  # (or columns dropped below: those first)
+                lp.add_cols(np.flatnonzero(back if back.any() else absent))
+                dropped[:] = False
                 continue
             if res.values is None or res.duals is None or res.reduced_costs is None:
                 break
@@ -265,6 +270,10 @@ class _Search:
             bounds.append(self.lb)
             if self.proven or self.left() <= 0 or self._root_flat(bounds):
                 break
+            if big:  # edge columns long priced out leave (priced back in when negative)
+                gone = columns.drop_root_stale(lp, res.reduced_costs, self.ub - res.objective)
+                dropped[gone] = True
+                self.stats["root_dropped"] = self.stats.get("root_dropped", 0) + len(gone)
             fix = (bound + rc > self.ub - self.gap + self.margin) & ~self.fixed
             if fix.any():  # fixed columns leave the LP (their nonzeros slow every LP down)
                 if self.log is not None:
@@ -290,6 +299,7 @@ class _Search:
                 break
             lp.purge(values, purge_age)
             lp.add_cuts(new)
+        lp.col_age[:] = 0  # the node loop ages columns by its own rule
         self.stats["root_rounds"] = self.stats.get("root_rounds", 0) + rounds  # (over both loops)
         self.stats["root_bound"] = float(self.lb)
         self.stats["root_cuts"] = len(lp.cuts)

@@ -28,9 +28,17 @@ if TYPE_CHECKING:
 DROP_AGE = 3
 #: A reduced cost counts as large above this share of the node's gap (incumbent minus LP value).
 DROP_SHARE = 1.0
+#: At a big root (:data:`~gtsp_bench.solvers.exact.mip.branch_cut.BIG_ROOT_NODES`), an edge column
+#: leaves the LP once its reduced cost stayed above ``ROOT_DROP_SHARE`` of the gap for
+#: ``ROOT_DROP_AGE`` rounds in a row. There about a tenth of the LP's columns are positive, half of
+#: them have a reduced cost above 2 % of the gap, and pricing brings in up to two columns per node
+#: a round, so the LP grew to 17,000 columns at UAV K = 100 and 39,000 at K = 200 (the root's LPs
+#: were most of its time): with the rule about 7,000 at K = 100, and the bound rose faster.
+ROOT_DROP_SHARE, ROOT_DROP_AGE = 0.02, 3
 
 
-def age_columns(age: np.ndarray, reduced_costs: np.ndarray, gap: float) -> np.ndarray:
+def age_columns(age: np.ndarray, reduced_costs: np.ndarray, gap: float,
+                share: float | None = None) -> np.ndarray:
     """The LP columns' new ages: one more where the reduced cost is large, else 0.
 
     Parameters
@@ -41,18 +49,21 @@ def age_columns(age: np.ndarray, reduced_costs: np.ndarray, gap: float) -> np.nd
         Per LP column, its reduced cost at the LP just solved.
     gap
         The incumbent's value minus the LP's (at least 0).
+    share
+        A reduced cost is large above this share of ``gap`` (default :data:`DROP_SHARE`).
 
     Returns
     -------
     numpy.ndarray
         The new ages.
     """
-    large = reduced_costs > DROP_SHARE * max(gap, 0.0)
+    large = reduced_costs > (DROP_SHARE if share is None else share) * max(gap, 0.0)
     return np.where(large & (reduced_costs > 0), age + 1, 0)
 
 
-def stale_columns(age: np.ndarray, keep: np.ndarray) -> np.ndarray:
-    """LP columns (positions) that leave the LP: aged :data:`DROP_AGE` or more and not kept.
+def stale_columns(age: np.ndarray, keep: np.ndarray, limit: int | None = None) -> np.ndarray:
+    """LP columns (positions) that leave the LP: aged ``limit`` (default :data:`DROP_AGE`) or more
+    and not kept.
 
     Parameters
     ----------
@@ -60,15 +71,18 @@ def stale_columns(age: np.ndarray, keep: np.ndarray) -> np.ndarray:
         Per LP column, from :func:`age_columns`.
     keep
         Per LP column, whether it must stay (branched on).
+    limit
+        The age from which a column leaves (0: none leaves).
 
     Returns
     -------
     numpy.ndarray
-        Their positions, increasing (none when :data:`DROP_AGE` is 0).
+        Their positions, increasing (none when the limit is 0).
     """
-    if DROP_AGE <= 0:
+    limit = DROP_AGE if limit is None else limit
+    if limit <= 0:
         return np.zeros(0, dtype=np.int64)
-    return np.flatnonzero((age >= DROP_AGE) & ~keep)
+    return np.flatnonzero((age >= limit) & ~keep)
 
 
 def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, pinned: np.ndarray) -> int:
@@ -94,6 +108,31 @@ def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, pinned: np.nd
     stale = stale_columns(lp.col_age, pinned[lp.cols])
     lp.drop_cols(stale)
     return len(stale)
+
+
+def drop_root_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float) -> np.ndarray:
+    """Age the LP's columns by the root LP just solved (:data:`ROOT_DROP_SHARE`) and drop the edge
+    columns aged :data:`ROOT_DROP_AGE` (the ``y`` columns stay).
+
+    Parameters
+    ----------
+    lp
+        The model in the backend, its basis that of the LP just solved.
+    reduced_costs
+        Per LP column, its reduced cost at that LP.
+    gap
+        The incumbent's value minus the LP's.
+
+    Returns
+    -------
+    numpy.ndarray
+        The model columns that left the LP.
+    """
+    lp.col_age = age_columns(lp.col_age, reduced_costs, gap, ROOT_DROP_SHARE)
+    stale = stale_columns(lp.col_age, lp.cols < lp.model.n_nodes, ROOT_DROP_AGE)
+    gone = lp.cols[stale]
+    lp.drop_cols(stale)
+    return gone
 
 
 def bound_moves(target: np.ndarray, applied: np.ndarray, cols: np.ndarray, fixed: np.ndarray

@@ -100,6 +100,33 @@ def test_root_purge_age_by_model_size(monkeypatch, big_from, root_age, seed):
     assert set(ages) <= {root_age, branch_cut.NODE_PURGE_AGE}
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_a_big_root_drops_priced_out_columns_and_still_proves(monkeypatch, tmp_path, seed):
+    """The big-root rule forced on a K = 8 model (any positive reduced cost, after one round):
+    edge columns leave the root LP, come back when priced in, the dp optimum is proven and the
+    proof's certificate checks."""
+    from gtsp_bench.proof import check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    monkeypatch.setattr(branch_cut, "BIG_ROOT_NODES", 0)
+    monkeypatch.setattr(columns, "ROOT_DROP_SHARE", 0.0)
+    monkeypatch.setattr(columns, "ROOT_DROP_AGE", 1)
+    inst = generate_instance(8, 5, seed=seed)
+    cert = tmp_path / "c.cert.json.gz"
+    r = run_solver(Milp(root_rounds=4, lns_trials=0, certificate=str(cert)), inst, 0.5)
+    assert r.stats["root_dropped"] > 0
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
+    checked = check_certificate(inst, read_certificate(cert))
+    assert checked.proven and checked.value == pytest.approx(r.objective, rel=1e-12)
+
+
+def test_a_small_root_keeps_its_columns():
+    """Below BIG_ROOT_NODES the root drops no column (GTSPLIB to 442 nodes, UAV K <= 50)."""
+    r = run_solver(Milp(root_rounds=4, lns_trials=0), generate_instance(8, 5, seed=0), 0.5)
+    assert "root_dropped" not in r.stats
+
+
 def test_branch_and_cut_runs_and_agrees_with_dp():
     """A K = 8 instance whose root LP is not integral: branching proves the dp optimum."""
     inst = generate_instance(8, 6, seed=5)

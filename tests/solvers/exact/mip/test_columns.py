@@ -32,6 +32,40 @@ def test_stale_columns_are_old_enough_and_not_kept(monkeypatch):
     assert len(columns.stale_columns(age, keep)) == 0
 
 
+def test_the_share_and_the_age_limit_can_be_given():
+    age = np.array([0, 2, 5])
+    rc = np.array([0.3, 0.1, 3.0])  # gap 2: above 0.2 with share 0.1
+    np.testing.assert_array_equal(columns.age_columns(age, rc, 2.0, share=0.1), [1, 0, 6])
+    keep = np.zeros(3, dtype=bool)
+    np.testing.assert_array_equal(columns.stale_columns(np.array([1, 0, 6]), keep, limit=1), [0, 2])
+    assert len(columns.stale_columns(np.array([1, 0, 6]), keep, limit=0)) == 0
+
+
+def test_the_root_drops_only_edge_columns_aged_enough(monkeypatch):
+    """drop_root_stale: a y column never leaves; an edge column leaves at ROOT_DROP_AGE."""
+    monkeypatch.setattr(columns, "ROOT_DROP_SHARE", 0.1)
+    monkeypatch.setattr(columns, "ROOT_DROP_AGE", 2)
+
+    class Lp:  # the three attributes drop_root_stale reads, and the drop it calls
+        def __init__(self) -> None:
+            self.model = type("M", (), {"n_nodes": 3})()
+            self.cols = np.array([0, 1, 2, 5, 7, 9])
+            self.col_age = np.array([1, 1, 0, 1, 0, 1])
+            self.dropped: list[np.ndarray] = []
+
+        def drop_cols(self, positions):
+            self.dropped.append(positions)
+            self.cols = np.delete(self.cols, positions)
+            self.col_age = np.delete(self.col_age, positions)
+
+    lp = Lp()
+    rc = np.array([5.0, 5.0, 5.0, 5.0, 5.0, 0.1])  # gap 10: large above 1
+    np.testing.assert_array_equal(columns.drop_root_stale(lp, rc, 10.0), [5])
+    np.testing.assert_array_equal(lp.dropped[0], [3])  # model column 5: an edge aged 2
+    np.testing.assert_array_equal(lp.cols, [0, 1, 2, 7, 9])
+    np.testing.assert_array_equal(lp.col_age, [2, 2, 1, 1, 0])
+
+
 def test_bound_moves_change_only_the_lp_columns_whose_code_differs():
     applied = np.array([-1, 0, 1, -1, 0, -1], dtype=np.int8)
     target = np.array([1, -1, 1, 0, 0, -1], dtype=np.int8)
