@@ -483,8 +483,9 @@ class _Search:
                 if self.log is not None:
                     self.log.fix_rule(self.cid, proof)
                 return res.objective, col, value, float(res.values[col]), fix
-            dropped = columns.drop_stale(lp, res.reduced_costs, self.ub - res.objective, self.pinned)
-            self.stats["cols_dropped"] = self.stats.get("cols_dropped", 0) + dropped
+            gone = columns.drop_stale(lp, res.reduced_costs, self.ub - res.objective,
+                                      self.pinned[lp.cols])
+            self.stats["cols_dropped"] = self.stats.get("cols_dropped", 0) + len(gone)
             lp.purge(values, NODE_PURGE_AGE)
             lp.add_cuts(new)
         return "stopped"

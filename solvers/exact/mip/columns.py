@@ -85,8 +85,9 @@ def stale_columns(age: np.ndarray, keep: np.ndarray, limit: int | None = None) -
     return np.flatnonzero((age >= limit) & ~keep)
 
 
-def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, pinned: np.ndarray) -> int:
-    """Age the LP's columns by the node LP just solved and drop the stale ones.
+def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, keep: np.ndarray,
+               share: float | None = None, limit: int | None = None) -> np.ndarray:
+    """Age the LP's columns by the LP just solved and drop the stale ones.
 
     Parameters
     ----------
@@ -96,43 +97,28 @@ def drop_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float, pinned: np.nd
         Per LP column, its reduced cost at that LP.
     gap
         The incumbent's value minus the LP's.
-    pinned
-        Per model column, whether it must stay in the LP (branched on).
-
-    Returns
-    -------
-    int
-        How many columns left the LP.
-    """
-    lp.col_age = age_columns(lp.col_age, reduced_costs, gap)
-    stale = stale_columns(lp.col_age, pinned[lp.cols])
-    lp.drop_cols(stale)
-    return len(stale)
-
-
-def drop_root_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float) -> np.ndarray:
-    """Age the LP's columns by the root LP just solved (:data:`ROOT_DROP_SHARE`) and drop the edge
-    columns aged :data:`ROOT_DROP_AGE` (the ``y`` columns stay).
-
-    Parameters
-    ----------
-    lp
-        The model in the backend, its basis that of the LP just solved.
-    reduced_costs
-        Per LP column, its reduced cost at that LP.
-    gap
-        The incumbent's value minus the LP's.
+    keep
+        Per LP column, whether it must stay in the LP (at a node: branched on).
+    share, limit
+        As in :func:`age_columns` and :func:`stale_columns` (defaults: the node loop's rule).
 
     Returns
     -------
     numpy.ndarray
         The model columns that left the LP.
     """
-    lp.col_age = age_columns(lp.col_age, reduced_costs, gap, ROOT_DROP_SHARE)
-    stale = stale_columns(lp.col_age, lp.cols < lp.model.n_nodes, ROOT_DROP_AGE)
+    lp.col_age = age_columns(lp.col_age, reduced_costs, gap, share)
+    stale = stale_columns(lp.col_age, keep, limit)
     gone = lp.cols[stale]
     lp.drop_cols(stale)
     return gone
+
+
+def drop_root_stale(lp: LpModel, reduced_costs: np.ndarray, gap: float) -> np.ndarray:
+    """:func:`drop_stale` by the big root's rule (:data:`ROOT_DROP_SHARE`,
+    :data:`ROOT_DROP_AGE`): edge columns only, the ``y`` columns stay."""
+    return drop_stale(lp, reduced_costs, gap, lp.cols < lp.model.n_nodes, ROOT_DROP_SHARE,
+                      ROOT_DROP_AGE)
 
 
 def bound_moves(target: np.ndarray, applied: np.ndarray, cols: np.ndarray, fixed: np.ndarray
