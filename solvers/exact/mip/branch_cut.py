@@ -65,8 +65,9 @@ ROOT_PURGE_AGE, NODE_PURGE_AGE = 3, 10
 #: was slack at ``BIG_ROOT_PURGE_AGE`` optima: there an LP costs thousands of simplex iterations a
 #: round (UAV K = 100, about 1,700 nodes: the certified gap at 150 s fell on 9 of 9 points, mean
 #: 0.373 -> 0.299 %), where on GTSPLIB up to 442 nodes the root loop took more rounds and most
-#: proofs took longer (45ts225 37 -> 46 s). UAV K = 50 has 730-910 nodes. Such a root also drops
-#: edge columns priced out for long (:func:`columns.drop_root_stale`).
+#: proofs took longer (45ts225 37 -> 46 s). UAV K = 50 has 730-910 nodes. A root of at least
+#: ``columns.ROOT_DROP_NODES`` also drops edge columns priced out for long
+#: (:func:`columns.drop_root_stale`).
 BIG_ROOT_NODES, BIG_ROOT_PURGE_AGE = 1200, 1
 
 
@@ -234,8 +235,8 @@ class _Search:
         """Root LP loop: price columns in, bound, fix by reduced cost, separate; whether it
         paused at ``until`` (a ``time.perf_counter()`` time) before it finished."""
         model, lp = self.model, self.lp
-        big = model.n_nodes >= BIG_ROOT_NODES
-        purge_age = BIG_ROOT_PURGE_AGE if big else ROOT_PURGE_AGE
+        purge_age = BIG_ROOT_PURGE_AGE if model.n_nodes >= BIG_ROOT_NODES else ROOT_PURGE_AGE
+        drops = model.n_nodes >= columns.ROOT_DROP_NODES
         dropped = np.zeros(model.n_cols, dtype=bool)  # columns this loop took out of the LP
         history: list[float] = []
         bounds: list[float] = []
@@ -270,7 +271,7 @@ class _Search:
             bounds.append(self.lb)
             if self.proven or self.left() <= 0 or self._root_flat(bounds):
                 break
-            if big:  # edge columns long priced out leave (priced back in when negative)
+            if drops:  # edge columns long priced out leave (priced back in when negative)
                 gone = columns.drop_root_stale(lp, res.reduced_costs, self.ub - res.objective)
                 dropped[gone] = True
                 self.stats["root_dropped"] = self.stats.get("root_dropped", 0) + len(gone)

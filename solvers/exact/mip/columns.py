@@ -28,13 +28,14 @@ if TYPE_CHECKING:
 DROP_AGE = 3
 #: A reduced cost counts as large above this share of the node's gap (incumbent minus LP value).
 DROP_SHARE = 1.0
-#: At a big root (:data:`~gtsp_bench.solvers.exact.mip.branch_cut.BIG_ROOT_NODES`), an edge column
-#: leaves the LP once its reduced cost stayed above ``ROOT_DROP_SHARE`` of the gap for
-#: ``ROOT_DROP_AGE`` rounds in a row. There about a tenth of the LP's columns are positive, half of
-#: them have a reduced cost above 2 % of the gap, and pricing brings in up to two columns per node
-#: a round, so the LP grew to 17,000 columns at UAV K = 100 and 39,000 at K = 200 (the root's LPs
-#: were most of its time): with the rule about 7,000 at K = 100, and the bound rose faster.
-ROOT_DROP_SHARE, ROOT_DROP_AGE = 0.02, 3
+#: At a root of at least ``ROOT_DROP_NODES`` model nodes, an edge column leaves the LP once its
+#: reduced cost stayed above ``ROOT_DROP_SHARE`` of the gap for ``ROOT_DROP_AGE`` rounds in a row.
+#: At UAV K = 200 (3,660-3,840 nodes) the root never finishes in 600 s, and its LP grew to 39,000
+#: columns (half of them above 2 % of the gap): with the rule 23,000, and the bound rose faster
+#: (000 omega 0, 600 s: certified gap 0.955 -> 0.814 %). At K = 100 (1,620-1,870 nodes) the root
+#: too rose faster (150 s: lower gap on 4 of 4 points) but ended sooner with a lower bound, and at
+#: 600 s two points were worse (0.078 -> 0.133 %, 0.069 -> 0.173 %), hence the size.
+ROOT_DROP_NODES, ROOT_DROP_SHARE, ROOT_DROP_AGE = 3000, 0.02, 3
 
 
 def age_columns(age: np.ndarray, reduced_costs: np.ndarray, gap: float,

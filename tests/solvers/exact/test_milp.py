@@ -102,13 +102,13 @@ def test_root_purge_age_by_model_size(monkeypatch, big_from, root_age, seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_a_big_root_drops_priced_out_columns_and_still_proves(monkeypatch, tmp_path, seed):
-    """The big-root rule forced on a K = 8 model (any positive reduced cost, after one round):
+    """The root's column rule forced on a K = 8 model (any positive reduced cost, one round):
     edge columns leave the root LP, come back when priced in, the dp optimum is proven and the
     proof's certificate checks."""
     from gtsp_bench.proof import check_certificate
     from gtsp_bench.proof.format import read_certificate
 
-    monkeypatch.setattr(branch_cut, "BIG_ROOT_NODES", 0)
+    monkeypatch.setattr(columns, "ROOT_DROP_NODES", 0)
     monkeypatch.setattr(columns, "ROOT_DROP_SHARE", 0.0)
     monkeypatch.setattr(columns, "ROOT_DROP_AGE", 1)
     inst = generate_instance(8, 5, seed=seed)
@@ -122,7 +122,7 @@ def test_a_big_root_drops_priced_out_columns_and_still_proves(monkeypatch, tmp_p
 
 
 def test_a_small_root_keeps_its_columns():
-    """Below BIG_ROOT_NODES the root drops no column (GTSPLIB to 442 nodes, UAV K <= 50)."""
+    """Below ROOT_DROP_NODES the root drops no column (GTSPLIB to 1,084 nodes, UAV K <= 100)."""
     r = run_solver(Milp(root_rounds=4, lns_trials=0), generate_instance(8, 5, seed=0), 0.5)
     assert "root_dropped" not in r.stats
 
