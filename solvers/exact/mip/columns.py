@@ -32,9 +32,10 @@ DROP_SHARE = 1.0
 #: reduced cost stayed above ``ROOT_DROP_SHARE`` of the gap for ``ROOT_DROP_AGE`` rounds in a row.
 #: At UAV K = 200 (3,660-3,840 nodes) the root never finishes in 600 s, and its LP grew to 39,000
 #: columns (half of them above 2 % of the gap): with the rule 23,000, and the bound rose faster
-#: (000 omega 0, 600 s: certified gap 0.955 -> 0.814 %). At K = 100 (1,620-1,870 nodes) the root
-#: too rose faster (150 s: lower gap on 4 of 4 points) but ended sooner with a lower bound, and at
-#: 600 s two points were worse (0.078 -> 0.133 %, 0.069 -> 0.173 %), hence the size.
+#: (`exact-frontier-uav`, its nine K = 200 solves: certified gap 0.631 -> 0.532 %). At K = 100
+#: (1,620-1,870 nodes) the root too rose faster (150 s: lower gap on 4 of 4 points) but ended
+#: sooner with a lower bound, and at 600 s two points were worse (0.078 -> 0.133 %, 0.069 ->
+#: 0.173 %), hence the size.
 ROOT_DROP_NODES, ROOT_DROP_SHARE, ROOT_DROP_AGE = 3000, 0.02, 3
 
 
