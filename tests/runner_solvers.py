@@ -218,3 +218,18 @@ def register() -> None:
                       ("t-missing", "NoSuchClass")):
         register_solver(name, f"tests.runner_solvers:{cls}", "runner test solver", bench=False,
                         replace=True)
+
+
+class Threads:
+    """Greedy, its stats the threads its worker process was told a solve may run: lns's default
+    ``workers`` there, and ``OMP_NUM_THREADS``."""
+
+    def solve(self, instance, omega, *, time_limit=None, seed=0):
+        import os
+
+        from gtsp_bench.solvers.heuristics.greedy import Greedy
+        from gtsp_bench.solvers.heuristics.lns_islands import default_workers
+
+        sol = Greedy().solve(instance, omega)
+        stats = {"workers": default_workers(), "omp": os.environ.get("OMP_NUM_THREADS")}
+        return Solution(sol.order, sol.heads, sol.objective, sol.status, stats=stats)

@@ -46,6 +46,9 @@ from typing import Any
 INIT_TIMEOUT_S = 300.0
 #: Thread-pool variables set to 1 in workers (unless already set): jobs x threads <= cores.
 THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+#: Set in workers (unless already set) to the threads one solve may run of its own: the cores over
+#: the pool's workers (a solver's own threads, e.g. lns's islands; the BLAS pools keep one).
+SOLVE_THREADS_VAR = "GTSP_BENCH_SOLVE_THREADS"
 #: Times a job is tried when its worker dies under it or it runs out of memory.
 MAX_ATTEMPTS = 3
 #: Cause of a failure outside the solver's control (see :data:`gtsp_bench.checks.FAILURE_CAUSES`).
@@ -198,11 +201,20 @@ def worker_path() -> list[str]:
     return [p for p in sys.path if p]
 
 
-def _start_worker(name: str, target: str | None, description: str) -> _Worker:
+def solve_threads(n_workers: int, cores: int | None = None) -> int:
+    """Threads one solve may run when ``n_workers`` solves share the cores this process may run
+    on (at least 1)."""
+    if cores is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, (cores or 1) // max(1, n_workers))
+
+
+def _start_worker(name: str, target: str | None, description: str, threads: int = 1) -> _Worker:
     ours, theirs = socket.socketpair()
     env = dict(os.environ)
     for var in THREAD_VARS:
         env.setdefault(var, "1")
+    env.setdefault(SOLVE_THREADS_VAR, str(threads))
     code = ("import sys, json; sys.path[:] = json.loads(sys.argv[2]); "
             "from gtsp_bench.bench.pool import worker_main; worker_main(int(sys.argv[1]))")
     try:
@@ -263,7 +275,8 @@ class WorkerPool:
             _stop_worker(w, kill=w.job is not None)
 
     def _start(self) -> None:
-        self.workers.append(_start_worker(self.solver, self.target, self.description))
+        self.workers.append(_start_worker(self.solver, self.target, self.description,
+                                          solve_threads(self.n_workers)))
 
     def run(self, jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], hard_limit: float,
             on_result: Callable[[Hashable, dict[str, Any], bool], None]) -> PhaseStats:

@@ -14,10 +14,11 @@ best tour starts from it with the region around its dearest cluster re-planned);
 costs the second trial of a ``budget`` run starts
 from the best tour reversed (``mirror``). Above ``LARGE`` clusters the windowed re-opt and sampled
 removals of :mod:`gtsp_bench.solvers.heuristics.lns_window`, quadrant neighbour lists, edge costs
-from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`), region re-solves at the end
-(:mod:`gtsp_bench.solvers.heuristics.lns_paths`) and two threads
-(:mod:`gtsp_bench.solvers.heuristics.lns_islands`) apply. ``docs/solvers/heuristics.md`` (lns)
-describes every option and the measurements behind the defaults.
+from the coordinates (:mod:`gtsp_bench.solvers.heuristics.lns_costs`) and region re-solves at the
+end (:mod:`gtsp_bench.solvers.heuristics.lns_paths`) apply; a ``budget`` run takes two threads
+where two cores are free (:mod:`gtsp_bench.solvers.heuristics.lns_islands`).
+``docs/solvers/heuristics.md`` (lns) describes every option and the measurements behind the
+defaults.
 
 The search has converged after ``trials`` trials. How it ends is its ``effort``
 (:mod:`gtsp_bench.solvers.heuristics.lns_settings`): ``fast``, ``default`` and ``slow`` stop
@@ -370,9 +371,9 @@ class Lns:
     :class:`LnsSettings`; ``docs/solvers/heuristics.md`` (lns) gives the details and measurements.
 
     Warm start (``initial``): the first trial starts from that tour, improved by the local search
-    (with ``starts``, it is the first tour raced; above ``LARGE`` clusters with two threads, the
-    first island's). A warm start whose claimed lower bound meets its objective is returned at
-    once, unchanged: nothing can improve it. Each better tour is reported to ``progress``.
+    (with ``starts``, it is the first tour raced; with two threads, the first island's). A warm
+    start whose claimed lower bound meets its objective is returned at once, unchanged: nothing
+    can improve it. Each better tour is reported to ``progress``.
 
     Parameters
     ----------
@@ -432,8 +433,8 @@ class Lns:
         (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``FAIL_TO``
         (1,500) clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`).
     workers, exchange
-        Threads of a timed search above ``LARGE`` clusters with effort ``budget`` (>= 1;
-        default :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
+        Threads of a timed search with effort ``budget`` (>= 1; default
+        :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
         islands that go on from the best island's tour after the ``exchange`` share of the
         trials' time (in [0, 1], default 0.5; 1: never;
         :mod:`gtsp_bench.solvers.heuristics.lns_islands`).

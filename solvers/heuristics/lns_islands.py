@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING
 
@@ -30,17 +31,19 @@ if TYPE_CHECKING:
 AUTO_WORKERS = 2
 
 
-def default_workers(environ: dict[str, str] | None = None, cores: int | None = None) -> int:
+def default_workers(environ: Mapping[str, str] | None = None, cores: int | None = None) -> int:
     """The default ``workers``: :data:`AUTO_WORKERS`, at most the cores this process may run on
-    and at most ``OMP_NUM_THREADS`` where that is set to a number (the runner's worker processes
-    set it to 1, so that jobs x threads <= cores and a sweep's solves each keep one thread)."""
+    and at most the threads a solve may run where the environment says so: ``GTSP_BENCH_SOLVE_THREADS``
+    (a benchmark's worker processes get the cores over the workers: with ``--jobs 1`` on two
+    cores, 2), else ``OMP_NUM_THREADS`` (a setting that is not a number is ignored)."""
     env = os.environ if environ is None else environ
     if cores is None:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     limit = min(AUTO_WORKERS, max(1, cores or 1))
-    text = env.get("OMP_NUM_THREADS", "").strip()
-    if text.isdigit() and int(text) >= 1:
-        limit = min(limit, int(text))
+    for var in ("GTSP_BENCH_SOLVE_THREADS", "OMP_NUM_THREADS"):
+        text = env.get(var, "").strip()
+        if text.isdigit() and int(text) >= 1:
+            return min(limit, int(text))
     return limit
 
 

@@ -10,7 +10,14 @@ import sys
 
 from gtsp_bench.solvers.heuristics.greedy import Greedy
 
-from gtsp_bench.bench.pool import MAX_ATTEMPTS, run_jobs, solve_message, worker_path
+from gtsp_bench.bench.pool import (
+    MAX_ATTEMPTS,
+    SOLVE_THREADS_VAR,
+    run_jobs,
+    solve_message,
+    solve_threads,
+    worker_path,
+)
 from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.generator import generate_instance
 from tests.conftest import REPO
@@ -134,3 +141,25 @@ def test_solve_message_record_carries_the_trajectory():
              "omega": 0.4, "seed": 0}
     assert check_log_record(json.loads(json.dumps(keyed)), INSTANCE.sizes) is not None
     assert "trajectory" not in solve_message(Crash(), "crash", _msg(0.4), {})
+
+
+def test_solve_threads_share_the_cores_among_the_workers():
+    """A solve may run the cores over the workers, at least one."""
+    assert solve_threads(1, cores=2) == 2 and solve_threads(2, cores=2) == 1
+    assert solve_threads(3, cores=2) == 1 and solve_threads(2, cores=16) == 8
+    assert solve_threads(1, cores=None) >= 1
+
+
+def test_workers_are_told_the_threads_a_solve_may_run(monkeypatch):
+    """One worker on two cores: lns's islands may take two threads while the BLAS pools keep one
+    (OMP_NUM_THREADS 1); two workers on two cores: one thread each."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    monkeypatch.delenv(SOLVE_THREADS_VAR, raising=False)
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    got: dict = {}
+    for n_workers, want in ((1, 2), (2, 1)):
+        run_jobs("t-threads", "tests.runner_solvers:Threads", "test", [(n_workers, _msg(0.3))],
+                 n_workers, 60.0, lambda job, rec, p: got.__setitem__(job, rec))
+        assert got[n_workers]["stats"]["omp"] == "1"
+        assert got[n_workers]["stats"]["workers"] == min(want, cores)

@@ -26,7 +26,7 @@ from tests.tiny_cases import tiny_asymmetric_case, tiny_case
 #: lns that stops when its trials are done instead of using the whole time limit.
 CONVERGE = {"stop_at_convergence": True}
 #: lns that uses the whole time limit (the fixed-budget benchmarks' runs).
-BUDGET = {"effort": "budget"}
+BUDGET = {"effort": "budget", "workers": 1}  # one thread: one search (test_lns_islands: two)
 
 
 @pytest.mark.parametrize("depot", [True, False])
@@ -286,7 +286,7 @@ def test_large_cycles_fit_only_whole_trials():
     (One thread: islands each end a trial at the exchange too.)"""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
-    r = run_solver(get_solver("lns", fit_trials=64, workers=1, **BUDGET), inst, 0.5, seed=1, time_limit=3.0)
+    r = run_solver(get_solver("lns", fit_trials=64, **BUDGET), inst, 0.5, seed=1, time_limit=3.0)
     assert r.stats["iterations"] >= 25 * (n + 1) * (r.stats["trials"] - 1)
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)

@@ -24,31 +24,39 @@ from gtsp_bench.registry import get_solver, run_solver
 @pytest.mark.parametrize("n, options, timed, workers", [
     (LARGE + 1, {"workers": 2, "effort": "budget"}, True, 2),
     (LARGE + 1, {"workers": 1, "effort": "budget"}, True, 1),
-    (LARGE, {"workers": 2, "effort": "budget"}, True, 1),  # up to LARGE clusters: one
+    (LARGE, {"workers": 2, "effort": "budget"}, True, 2),  # any size
+    (5, {"workers": 2, "effort": "budget"}, True, 2),
     (LARGE + 1, {"workers": 2, "effort": "budget"}, False, 1),  # no time limit
     (LARGE + 1, {"workers": 2}, True, 1),  # the default effort stops after its trials
     (LARGE + 1, {"workers": 2, "stop_at_convergence": True}, True, 1),
 ])
 def test_threads_by_size_and_budget(n, options, timed, workers):
-    """``workers`` threads above LARGE clusters in a time-limited run with effort ``budget`` (a
-    run that stops after its trials stays reproducible), else one."""
+    """``workers`` threads in a time-limited run with effort ``budget`` (a run that stops after
+    its trials stays reproducible), else one."""
     assert LnsSettings(**options).workers_for(n, timed) == workers
 
 
 def test_default_threads_follow_the_cores_and_omp(monkeypatch):
-    """By default two threads where two cores are free, one on one core or where OMP_NUM_THREADS
-    says 1 (the runner's workers), never more than two; a setting that is not a number is
-    ignored. Up to LARGE clusters the default is one thread whatever the machine."""
+    """By default two threads where two cores are free, one on one core or where the environment
+    says 1, never more than two; a setting that is not a number is ignored. The threads a
+    benchmark's worker may run (GTSP_BENCH_SOLVE_THREADS) win over OMP_NUM_THREADS, which those
+    workers set to 1 for the BLAS pools. An effort that stops runs one thread."""
     assert default_workers({}, cores=2) == 2
     assert default_workers({}, cores=16) == AUTO_WORKERS == 2
     assert default_workers({}, cores=1) == 1
     assert default_workers({"OMP_NUM_THREADS": "1"}, cores=8) == 1
     assert default_workers({"OMP_NUM_THREADS": "4"}, cores=8) == 2
     assert default_workers({"OMP_NUM_THREADS": "auto"}, cores=2) == 2
+    both = {"OMP_NUM_THREADS": "1", "GTSP_BENCH_SOLVE_THREADS": "2"}
+    assert default_workers(both, cores=2) == 2 and default_workers(both, cores=1) == 1
+    assert default_workers({"OMP_NUM_THREADS": "4", "GTSP_BENCH_SOLVE_THREADS": "1"}, cores=8) == 1
+    assert default_workers({"OMP_NUM_THREADS": "1", "GTSP_BENCH_SOLVE_THREADS": "x"}, cores=8) == 1
+    monkeypatch.delenv("GTSP_BENCH_SOLVE_THREADS", raising=False)
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
     assert LnsSettings().workers_for(LARGE + 1, True) == 1
     monkeypatch.delenv("OMP_NUM_THREADS")
     assert LnsSettings().workers_for(LARGE, True) == 1
+    assert LnsSettings(effort="budget").workers_for(LARGE, True) == default_workers()
 
 
 def test_island_starts():
