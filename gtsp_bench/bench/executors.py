@@ -111,7 +111,8 @@ def _thread_pool(solver: str, target: str | None, description: str) -> WorkerPoo
     if pool is not None:
         pool.close()
     with _POOLS_LOCK:
-        pool = _POOLS[me] = WorkerPool(solver, target, description, 1)
+        # one thread a solve, as the Dask workers (single-threaded, one per core) are counted
+        pool = _POOLS[me] = WorkerPool(solver, target, description, 1, threads=1)
     return pool
 
 

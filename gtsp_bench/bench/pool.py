@@ -257,9 +257,12 @@ class WorkerPool:
     ``n_workers``); :func:`run_jobs` is one pool used once. Close it (or use it as a context
     manager) to stop its workers."""
 
-    def __init__(self, solver: str, target: str | None, description: str, n_workers: int) -> None:
+    def __init__(self, solver: str, target: str | None, description: str, n_workers: int,
+                 threads: int | None = None) -> None:
         self.solver, self.target, self.description = solver, target, description
         self.n_workers = n_workers
+        #: Threads one solve may run (default: :func:`solve_threads` of ``n_workers``).
+        self.threads = solve_threads(n_workers) if threads is None else threads
         self.workers: list[_Worker] = []
 
     def __enter__(self) -> WorkerPool:
@@ -275,8 +278,7 @@ class WorkerPool:
             _stop_worker(w, kill=w.job is not None)
 
     def _start(self) -> None:
-        self.workers.append(_start_worker(self.solver, self.target, self.description,
-                                          solve_threads(self.n_workers)))
+        self.workers.append(_start_worker(self.solver, self.target, self.description, self.threads))
 
     def run(self, jobs: Sequence[tuple[Hashable, Mapping[str, Any]]], hard_limit: float,
             on_result: Callable[[Hashable, dict[str, Any], bool], None]) -> PhaseStats:

@@ -80,6 +80,20 @@ def test_dask_gives_the_local_pools_objectives_and_a_rerun_reuses_every_solve(tm
 
 
 @dask_mark
+def test_a_solve_on_a_dask_worker_may_run_one_thread(scheduler):
+    """Dask workers are counted one per core, one thread each: a solve there is told it may run
+    one thread (lns's islands stay one), whatever the machine's cores."""
+    distributed = pytest.importorskip("distributed")
+    from tests.bench.test_pool import _msg
+
+    with distributed.Client(scheduler) as client:
+        out = client.submit(executors.solve_on_worker, "t-threads", "tests.runner_solvers:Threads",
+                            "test", 0, _msg(0.3), 60.0, pure=False).result(timeout=120)
+    rec = out["record"]
+    assert rec["status"] == "feasible" and rec["stats"]["workers"] == 1
+
+
+@dask_mark
 def test_a_set_sweep_on_dask_matches_the_local_pool_and_holds_the_lock(tmp_path, scheduler, capsys):
     """`bench sets --set FOLDER` with greedy and lns (seeded) on a Dask scheduler gives the local pool's
     objectives solve for solve, re-uses every solve on a second run, and a sweep on a locked
