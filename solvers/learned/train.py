@@ -153,6 +153,8 @@ class Trainer:
         self.step, self.wall = int(s["step"]), float(s["wall"])
         self.best, self.best_step = float(s["best"]), int(s["best_step"])
         self.rows = json.loads(s["rows"])
+        # the state is written before the log: a kill between the two leaves the log a row behind
+        self._write_log()
 
     def _save_state(self) -> None:
         state = {

@@ -108,6 +108,18 @@ def test_direction_recorded_and_drl_only(tmp_path):
         _cfg("am", direction=True)
 
 
+def test_resume_rewrites_a_log_that_lags_the_state(tmp_path):
+    """Killed after the state was saved and before the log was (the state is written first): a
+    resumed run, even one with nothing left to train, rewrites the log from the state's rows."""
+    Trainer(_cfg(steps=4), tmp_path / "run.pt").run(progress=False)
+    log = output_paths(tmp_path / "run.pt")["log"]
+    full = log.read_text()
+    log.write_text("".join(full.splitlines(keepends=True)[:-1]))  # the last row lost
+    resumed = Trainer(_cfg(steps=4), tmp_path / "run.pt", resume=True)
+    resumed.run(progress=False)
+    assert log.read_text() == full and [int(r["step"]) for r in _rows(log)][-1] == 4
+
+
 def test_resume_after_interruption_continues_from_saved_step(tmp_path, monkeypatch):
     """Interrupted at step 5 (state saved at 4), a resumed run ends where an uninterrupted one does."""
     ref = Trainer(_cfg(steps=8), tmp_path / "ref.pt")
