@@ -31,11 +31,15 @@ Two optional keywords of ``solve`` are declared the same way, by naming them in 
     a warm start: a :class:`Solution` already checked and priced by the evaluator (its
     ``lower_bound`` is whatever the caller claimed, unchecked). A solver without it refuses a
     warm start with one :class:`~gtsp_bench.errors.InputError` line.
+
+A solver that runs threads of its own may run as many as :data:`SOLVE_THREADS_VAR` says where it
+is set (a benchmark's worker processes set it), at most :func:`usable_cores`.
 """
 
 from __future__ import annotations
 
 import inspect
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -262,8 +266,19 @@ def is_capped(solver: object) -> bool:
     return getattr(cls, "capped", False) is True
 
 
+#: The environment variable by which a benchmark's worker process tells a solver how many threads
+#: one solve may run of its own (the cores over the workers: ``gtsp_bench.bench.pool``).
+SOLVE_THREADS_VAR = "GTSP_BENCH_SOLVE_THREADS"
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the platform has one), >= 1."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, cores or 1)
+
+
 __all__ = [
-    "REL_TOL", "STATUSES", "BatchSolver", "Progress", "Result", "Solution", "Solver",
+    "REL_TOL", "SOLVE_THREADS_VAR", "STATUSES", "BatchSolver", "Progress", "Result", "Solution", "Solver",
     "TrajectoryPoint", "handles_asymmetric", "is_capped", "no_progress", "solves_batches",
-    "takes_keyword",
+    "takes_keyword", "usable_cores",
 ]

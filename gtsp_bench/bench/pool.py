@@ -42,13 +42,12 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
+from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
+
 #: Seconds a worker may take to import and build its solver.
 INIT_TIMEOUT_S = 300.0
 #: Thread-pool variables set to 1 in workers (unless already set): jobs x threads <= cores.
 THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
-#: Set in workers (unless already set) to the threads one solve may run of its own: the cores over
-#: the pool's workers (a solver's own threads, e.g. lns's islands; the BLAS pools keep one).
-SOLVE_THREADS_VAR = "GTSP_BENCH_SOLVE_THREADS"
 #: Times a job is tried when its worker dies under it or it runs out of memory.
 MAX_ATTEMPTS = 3
 #: Cause of a failure outside the solver's control (see :data:`gtsp_bench.checks.FAILURE_CAUSES`).
@@ -204,9 +203,7 @@ def worker_path() -> list[str]:
 def solve_threads(n_workers: int, cores: int | None = None) -> int:
     """Threads one solve may run when ``n_workers`` solves share the cores this process may run
     on (at least 1)."""
-    if cores is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, (cores or 1) // max(1, n_workers))
+    return max(1, (usable_cores() if cores is None else cores) // max(1, n_workers))
 
 
 def _start_worker(name: str, target: str | None, description: str, threads: int = 1) -> _Worker:
@@ -214,7 +211,7 @@ def _start_worker(name: str, target: str | None, description: str, threads: int 
     env = dict(os.environ)
     for var in THREAD_VARS:
         env.setdefault(var, "1")
-    env.setdefault(SOLVE_THREADS_VAR, str(threads))
+    env.setdefault(SOLVE_THREADS_VAR, str(threads))  # a solver's own threads (lns's islands)
     code = ("import sys, json; sys.path[:] = json.loads(sys.argv[2]); "
             "from gtsp_bench.bench.pool import worker_main; worker_main(int(sys.argv[1]))")
     try:

@@ -343,7 +343,7 @@ class _Search:
         if tail > 0.0:  # the trials stop early; the rest of the budget re-solves regions
             clock0 = time.perf_counter()
             deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
-        workers = s.workers_for(p.n_clusters, timed)
+        workers = s.workers_for(timed)
         islands: list[float] = []
         if workers > 1:  # each island re-solves regions of its own best at the end
             run, islands = run_islands(self, workers, deadline, final if tail > 0.0 else None)

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING
 
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 
+from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
+
 if TYPE_CHECKING:
     from gtsp_bench.solvers.heuristics.lns import _Run, _Search
 
@@ -37,10 +39,8 @@ def default_workers(environ: Mapping[str, str] | None = None, cores: int | None 
     (a benchmark's worker processes get the cores over the workers: with ``--jobs 1`` on two
     cores, 2), else ``OMP_NUM_THREADS`` (a setting that is not a number is ignored)."""
     env = os.environ if environ is None else environ
-    if cores is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    limit = min(AUTO_WORKERS, max(1, cores or 1))
-    for var in ("GTSP_BENCH_SOLVE_THREADS", "OMP_NUM_THREADS"):
+    limit = min(AUTO_WORKERS, max(1, usable_cores() if cores is None else cores))
+    for var in (SOLVE_THREADS_VAR, "OMP_NUM_THREADS"):
         text = env.get(var, "").strip()
         if text.isdigit() and int(text) >= 1:
             return min(limit, int(text))

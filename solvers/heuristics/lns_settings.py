@@ -228,8 +228,8 @@ class LnsSettings:
             return self.fail_passes
         return 1 if FAIL_FROM <= n <= FAIL_TO and not self.stops else 0
 
-    def workers_for(self, n: int, timed: bool) -> int:
-        """Threads searching a cycle of ``n`` clusters: ``workers`` (default
+    def workers_for(self, timed: bool) -> int:
+        """Threads searching a cycle of any size: ``workers`` (default
         :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`, 2 where two cores are
         free) in a run with a time limit (``timed``) that does not :attr:`stop <stops>`, else 1.
         On GLNS's 45 files at half of GLNS's time, one solve at a time on two cores, two threads

@@ -20,6 +20,7 @@ from gtsp_bench.bench.pool import (
 )
 from gtsp_bench.data.parse import format_json_instance
 from gtsp_bench.generator import generate_instance
+from gtsp_bench.solver import usable_cores
 from tests.conftest import REPO
 from tests.runner_solvers import KILLS_FILE, Crash, OutOfMemory, Refuses
 
@@ -153,7 +154,7 @@ def test_solve_threads_share_the_cores_among_the_workers():
 def test_workers_are_told_the_threads_a_solve_may_run(monkeypatch):
     """One worker on two cores: lns's islands may take two threads while the BLAS pools keep one
     (OMP_NUM_THREADS 1); two workers on two cores: one thread each."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cores = usable_cores()  # the worker's own, before the patch below
     monkeypatch.delenv(SOLVE_THREADS_VAR, raising=False)
     monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
