@@ -422,7 +422,8 @@ class Lns:
         random insertion, each improved by the local search and one short trial of
         ``start_iterations`` (>= 1) iterations per cluster; the trials start from the best.
     paths, path_clusters, path_iterations
-        Share of the time limit, in [0, 1] (default 0.3), kept for region re-solves of the best
+        Share of the time limit, in [0, 1] (default 0.3, and 0.8 above ``FAIL_TO`` clusters:
+        :meth:`LnsSettings.path_share_for`), kept for region re-solves of the best
         tour at the end (above ``LARGE`` clusters, symmetric costs, timed, effort ``budget``): the
         ``path_clusters`` (>= 2, default 80) clusters nearest a
         random one, the tour's paths through them re-solved as a small GTSP with
@@ -470,7 +471,7 @@ class Lns:
         points: bool | None = None, quadrants: bool | None = None, macro: bool = False,
         macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
         start_iterations: int = 5,
-        paths: float = 0.3, path_clusters: int = 80, path_iterations: int = 5,
+        paths: float | None = None, path_clusters: int = 80, path_iterations: int = 5,
         fail_passes: int | None = None, workers: int | None = None, exchange: float = 0.5,
         mirror: bool | None = None, plateau: bool | None = None, regional: float | None = None,
     ) -> None:

@@ -192,6 +192,10 @@ def test_default_run_ends_with_regions_above_large():
 
 @pytest.mark.parametrize("n, symmetric, options, timed, share", [
     (LARGE + 1, True, {"effort": "budget"}, True, 0.3),
+    (FAIL_TO, True, {"effort": "budget"}, True, 0.3),
+    (FAIL_TO + 1, True, {"effort": "budget"}, True, 0.8),  # no region passes between trials
+    (FAIL_TO + 1, True, {"paths": 0.3, "effort": "budget"}, True, 0.3),
+    (FAIL_TO + 1, True, {"effort": "default"}, True, 0.0),
     (LARGE + 1, True, {"paths": 0.15, "effort": "budget"}, True, 0.15),
     (LARGE + 1, True, {}, True, 0.0),  # the default effort stops after its trials
     (LARGE, True, {}, True, 0.0),  # up to LARGE clusters: never
@@ -201,8 +205,8 @@ def test_default_run_ends_with_regions_above_large():
     (LARGE + 1, True, {"paths": 0.0}, True, 0.0),
 ])
 def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
-    """The end phase's share: ``paths`` (default 0.3) above LARGE clusters on symmetric costs in
-    a time-limited run with effort ``budget``, else none."""
+    """The end phase's share: ``paths`` (default 0.3, 0.8 above FAIL_TO clusters) above LARGE
+    clusters on symmetric costs in a time-limited run with effort ``budget``, else none."""
     assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
 
 
