@@ -322,7 +322,7 @@ class _Search:
         ``passes`` passes, counted in ``run``'s stats; returns the saving."""
         assert self.regions is not None
         saved, count = region_passes(self.p, tour, self.regions, self.s.path_clusters,
-                                     self.s.path_iterations, deadline, rng, passes)
+                                     self.s.path_iterations, deadline, rng, passes, self.progress)
         run.windows, run.window_saving = run.windows + count, run.window_saving + saved
         return saved
 

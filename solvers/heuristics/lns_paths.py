@@ -29,6 +29,7 @@ from gtsp_bench.solvers.heuristics.local_search import is_past
 from scipy.spatial import cKDTree
 
 from gtsp_bench.problem import Problem
+from gtsp_bench.solver import Progress, no_progress
 
 #: Neighbour-list length inside a region's sub-problem (lns's default on symmetric costs).
 NEIGHBOURS = 10
@@ -187,11 +188,13 @@ class Regions:
 
 def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
                   iterations: int, deadline: float | None, rng: np.random.Generator,
-                  passes: int | None = None) -> tuple[float, int]:
+                  passes: int | None = None, progress: Progress = no_progress
+                  ) -> tuple[float, int]:
     """Re-solve regions of ``size`` clusters (at most ``len(tour) - 2``) round random clusters of
     ``tour`` (changed in place; :func:`improve_region`) until ``deadline`` (checked before each
     region) or ``passes`` passes of ``ceil(2 n / size)`` regions (no deadline and no ``passes``:
-    one pass). Returns (the saving, the regions solved)."""
+    one pass), telling ``progress`` the tour's cost after each region that saved something.
+    Returns (the saving, the regions solved)."""
     n = len(tour)
     size = min(size, n - 2)
     if size < 2:
@@ -204,6 +207,9 @@ def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: in
     while (count is None or done < count) and not is_past(deadline):
         pos[problem.cluster_of[tour]] = np.arange(n)
         around = regions.around(int(rng.integers(n)), size)
-        saved += improve_region(problem, tour, pos[around], iterations)
+        gain = improve_region(problem, tour, pos[around], iterations)
+        if gain > 0.0:
+            saved += gain
+            progress(problem.tour_cost(tour))
         done += 1
     return saved, done

@@ -157,7 +157,7 @@ def test_regions_by_centres_and_by_neighbour_lists():
 def test_region_passes_never_make_the_tour_worse():
     """Two passes of regions over a greedy tour: ``2 x ceil(2 n / size)`` regions, a valid tour,
     cheaper or the same, never below the DP's proven optimum, and the saving is what the tour
-    lost."""
+    lost; ``progress`` is told the cost after each region that saved something."""
     inst = generate_instance(11, 3, seed=4)
     optimum = run_solver("dp", inst, 0.5).objective
     problem = price(inst, 0.5)
@@ -165,12 +165,16 @@ def test_region_passes_never_make_the_tour_worse():
     cost = problem.tour_cost(tour)
     kernels.seed(2)
     near = _Search(problem, LnsSettings(neighbours=4), np.random.default_rng(0)).near
+    told: list[float] = []
     saved, regions = region_passes(problem, tour, Regions(near), 6, 5, None,
-                                   np.random.default_rng(0), passes=2)
+                                   np.random.default_rng(0), passes=2, progress=told.append)
     assert regions == 2 * 4  # ceil(2 * 12 / 6) regions a pass
     assert _valid(problem, tour)
     assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
     assert problem.tour_cost(tour) >= optimum - 1e-9 * optimum
+    # progress hears each region that saved something: falling costs, the last the tour's
+    assert saved > 0.0 and told and told == sorted(told, reverse=True)
+    assert told[-1] == problem.tour_cost(tour) and told[0] < cost
 
 
 def test_default_run_ends_with_regions_above_large():
