@@ -216,8 +216,8 @@ class LnsSettings:
         (``timed``) that does not :attr:`stop <stops>`, ``paths`` (by default ``PATHS``, and
         ``PATHS_ABOVE_FAIL_TO`` above ``FAIL_TO`` clusters), else 0. Above ``FAIL_TO`` no region
         re-solves run between the trials (:meth:`fail_passes_for`), and on the six files of
-        2,000-3,023 clusters at 60 s (three seeds) the mean gap fell from 0.60 % with 0.3 to
-        0.52 % with 0.6 and 0.47 % with 0.8, and rose to 0.51 % with 1.0 (no trials after the first
+        2,000-3,023 clusters at 60 s (three seeds) the mean gap was 0.60 % with 0.3, 0.52 % with
+        0.6, 0.47 and 0.52 % in two runs with 0.8, and 0.51 % with 1.0 (no trials after the first
         tour; ``docs/notes/2026-11-29-lns-longer-end-phase.md``)."""
         if not (n > LARGE and symmetric and timed and not self.stops):
             return 0.0
