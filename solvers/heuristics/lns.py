@@ -45,7 +45,7 @@ from gtsp_bench.solvers.heuristics.lns_macro import (
     cluster_centres,
     macro_tour,
 )
-from gtsp_bench.solvers.heuristics.lns_paths import Regions, region_passes
+from gtsp_bench.solvers.heuristics.lns_paths import Regions, region_passes, shared_region_passes
 from gtsp_bench.solvers.heuristics.lns_settings import EFFORTS, LARGE, Effort, LnsSettings
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, deadline_after, is_past
 
@@ -326,9 +326,17 @@ class _Search:
         run.windows, run.window_saving = run.windows + count, run.window_saving + saved
         return saved
 
-    def finish(self, run: _Run, deadline: float, rng: np.random.Generator) -> None:
-        """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``."""
-        self.polish(run, run.best, deadline, rng)
+    def finish(self, run: _Run, deadline: float, rngs: list[np.random.Generator]) -> None:
+        """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``,
+        by one thread per generator of ``rngs`` (several: :func:`~.lns_paths.shared_region_passes`)."""
+        if len(rngs) == 1:
+            self.polish(run, run.best, deadline, rngs[0])
+        else:
+            assert self.regions is not None
+            saved, count = shared_region_passes(self.p, run.best, self.regions,
+                                                self.s.path_clusters, self.s.path_iterations,
+                                                deadline, rngs, self.progress)
+            run.windows, run.window_saving = run.windows + count, run.window_saving + saved
         run.best_cost = self.p.tour_cost(run.best)
         self.progress(run.best_cost)
 
@@ -345,13 +353,13 @@ class _Search:
             deadline = clock0 + (1.0 - tail) * max(0.0, deadline - clock0)
         workers = s.workers_for(timed)
         islands: list[float] = []
-        if workers > 1:  # each island re-solves regions of its own best at the end
+        if workers > 1:  # every thread re-solves regions of the best island's tour at the end
             run, islands = run_islands(self, workers, deadline, final if tail > 0.0 else None)
         else:
             run = self.first(deadline)
             self.trials(run, deadline, self.rng)
             if tail > 0.0:
-                self.finish(run, final, self.rng)
+                self.finish(run, final, [self.rng])
         weights = dict(zip(REMOVALS, run.weights_r, strict=True))
         weights.update(zip(INSERTIONS, run.weights_i, strict=True))
         stats = {"iterations": run.done, "trials": run.trials, "best_at": run.best_at,
@@ -438,7 +446,8 @@ class Lns:
         :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
         islands that go on from the best island's tour after the ``exchange`` share of the
         trials' time (in [0, 1], default 0.5; 1: never;
-        :mod:`gtsp_bench.solvers.heuristics.lns_islands`).
+        :mod:`gtsp_bench.solvers.heuristics.lns_islands`); in the end phase (``paths``) all
+        re-solve regions of the best island's tour.
     mirror
         The second trial starts from the best tour reversed, and its tour replaces the base only
         if it beat it (default: on asymmetric costs with effort ``budget``; a tour's direction can

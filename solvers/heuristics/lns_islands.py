@@ -7,10 +7,12 @@ On the large GTSPLIB files the first tour decides lns's basin more than the time
 searches from its own first tour (the usual one, then the macro tour on a planar instance, then
 random-insertion tours) with its own random numbers, independently until the ``exchange`` share of
 the trial phase has passed; then every island goes on from the best island's best tour (its own
-random numbers still), in the end phase re-solves regions of its own best tour, and the cheapest
-tour of all is the answer. The kernels release the GIL
-(numba ``nogil``) and numba keeps one random state per thread, so the islands run on separate
-cores with plain :mod:`threading`; the problem's arrays are shared, read-only.
+random numbers still). In the end phase every thread re-solves regions of the best island's tour,
+each change merged into it (:func:`~.lns_paths.shared_region_passes`): one tour at twice the
+regions a second did better than each island re-solving its own best, the cheaper kept
+(measured in docs/notes/, 2026-11-29). The kernels release the GIL (numba ``nogil``)
+and numba keeps one random state per thread, so the threads run on separate cores with plain
+:mod:`threading`; the problem's arrays are shared, read-only.
 """
 
 from __future__ import annotations
@@ -73,10 +75,10 @@ def merge(runs: list[_Run]) -> _Run:
 def run_islands(search: _Search, workers: int, deadline: float, final: float | None = None
                 ) -> tuple[_Run, list[float]]:
     """Run ``workers`` islands of ``search``'s trials until ``deadline`` (a time limit is needed),
-    then, given ``final``, each island's end phase (region re-solves of its own best tour) until
-    ``final``; returns the merged state (:func:`merge`) and each island's best cost. First tours
-    by :func:`island_kinds`, one exchange of the best tour after ``search.s.exchange`` of the
-    trials' time (1.0: none)."""
+    then, given ``final``, the end phase (region re-solves of the best island's tour by all
+    threads) until ``final``; returns the merged state (:func:`merge`) and each island's best
+    cost. First tours by :func:`island_kinds`, one exchange of the best tour after
+    ``search.s.exchange`` of the trials' time (1.0: none)."""
     seeds = search.rng.integers(2**31 - 1, size=workers)
     rngs = search.rng.spawn(workers)
     kinds = island_kinds(search, workers)
@@ -105,6 +107,6 @@ def run_islands(search: _Search, workers: int, deadline: float, final: float | N
                 if r is not win:
                     r.best, r.best_cost = win.best.copy(), win.best_cost
             list(pool.map(rest, range(workers)))
-        if final is not None:
-            list(pool.map(lambda j: search.finish(done[j], final, rngs[j]), range(workers)))
+    if final is not None:  # every thread on the best island's tour
+        search.finish(min(done, key=lambda r: r.best_cost), final, rngs)
     return merge(done), [r.best_cost for r in done]

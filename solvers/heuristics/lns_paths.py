@@ -22,6 +22,8 @@ consecutive clusters (a single path) cannot (docs/notes/lns-vs-glns.md, 2026-11-
 from __future__ import annotations
 
 import math
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
@@ -213,3 +215,93 @@ def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: in
             progress(problem.tour_cost(tour))
         done += 1
     return saved, done
+
+
+def _edges(tour: np.ndarray, base: int) -> np.ndarray:
+    """A cycle's undirected edges as sorted codes ``low * base + high`` (node ids below ``base``)."""
+    nxt = np.roll(tour, -1)
+    return np.sort(np.minimum(tour, nxt) * base + np.maximum(tour, nxt))
+
+
+def merged_tour(current: np.ndarray, before: np.ndarray, after: np.ndarray,
+                base: int) -> np.ndarray | None:
+    """``current`` with the change from ``before`` to ``after`` made in it: the edges that
+    ``after`` dropped from ``before`` taken out of ``current``, those it added put in (cycles of
+    node ids below ``base``, one per cluster, ``before`` and ``after`` of the same clusters).
+    ``None`` where that is not one cycle through all of ``current``'s clusters: a dropped edge is
+    no longer in ``current`` (another change took it), or the edges left and added close a
+    shorter cycle. Where it is one cycle its cost is ``current``'s minus the change's saving (the
+    same edges and heads go and come)."""
+    old, new = _edges(before, base), _edges(after, base)
+    gone, came = np.setdiff1d(old, new), np.setdiff1d(new, old)
+    if not np.isin(gone, _edges(current, base)).all():
+        return None
+    links: dict[int, list[int]] = {}
+    for a, b in zip(current, np.roll(current, -1), strict=True):
+        links.setdefault(int(a), []).append(int(b))
+        links.setdefault(int(b), []).append(int(a))
+    for code in gone:
+        a, b = divmod(int(code), base)
+        links[a].remove(b)
+        links[b].remove(a)
+    for code in came:
+        a, b = divmod(int(code), base)
+        links.setdefault(a, []).append(b)
+        links.setdefault(b, []).append(a)
+    n = len(current)
+    out, prev, at = [int(after[0])], -1, int(after[0])
+    for _ in range(n):
+        ends = links.get(at, [])
+        if len(ends) != 2:
+            return None
+        nxt = ends[1] if ends[0] == prev else ends[0]
+        if nxt == out[0]:
+            break
+        prev, at = at, nxt
+        out.append(at)
+    tour = np.array(out, dtype=np.int64)
+    return tour if len(tour) == n and all(len(v) in (0, 2) for v in links.values()) else None
+
+
+def shared_region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
+                         iterations: int, deadline: float, rngs: list[np.random.Generator],
+                         progress: Progress = no_progress) -> tuple[float, int]:
+    """:func:`region_passes` on one tour by ``len(rngs)`` threads at once, until ``deadline``.
+
+    Each thread re-solves a region of a copy of the tour as it was when the thread began
+    (:func:`improve_region` runs without the GIL most of its time), and a saving is put into the
+    shared ``tour`` (changed in place) under a lock: as it is where no other change came in
+    between, else by :func:`merged_tour` (dropped where the two changes clash). Returns (the
+    saving, the regions solved)."""
+    n = len(tour)
+    size = min(size, n - 2)
+    if size < 2:
+        return 0.0, 0
+    lock = threading.Lock()
+    base = problem.n_nodes
+    state = {"version": 0, "saved": 0.0, "done": 0}
+
+    def work(rng: np.random.Generator) -> None:
+        pos = np.empty(n, dtype=np.int64)
+        while not is_past(deadline):
+            with lock:
+                before, seen = tour.copy(), state["version"]
+            pos[problem.cluster_of[before]] = np.arange(n)
+            after = before.copy()
+            gain = improve_region(problem, after, pos[regions.around(int(rng.integers(n)), size)],
+                                  iterations)
+            with lock:
+                state["done"] += 1
+                if gain <= 0.0:
+                    continue
+                new = after if state["version"] == seen else merged_tour(tour, before, after, base)
+                if new is None or len(np.unique(problem.cluster_of[new])) != n:
+                    continue
+                tour[:] = new
+                state["version"] += 1
+                state["saved"] += gain
+                progress(problem.tour_cost(tour))
+
+    with ThreadPoolExecutor(max_workers=len(rngs), thread_name_prefix="lns-regions") as pool:
+        list(pool.map(work, rngs))
+    return float(state["saved"]), int(state["done"])

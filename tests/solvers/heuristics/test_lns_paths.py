@@ -13,8 +13,10 @@ from gtsp_bench.solvers.heuristics.lns_paths import (
     Regions,
     crossings,
     improve_region,
+    merged_tour,
     path_cost,
     region_passes,
+    shared_region_passes,
 )
 from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, FAIL_TO
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
@@ -175,6 +177,62 @@ def test_region_passes_never_make_the_tour_worse():
     # progress hears each region that saved something: falling costs, the last the tour's
     assert saved > 0.0 and told and told == sorted(told, reverse=True)
     assert told[-1] == problem.tour_cost(tour) and told[0] < cost
+
+
+def _two_opt(tour: list[int], i: int, j: int) -> np.ndarray:
+    """``tour`` with positions ``i..j`` reversed."""
+    return np.array(tour[:i] + tour[i:j + 1][::-1] + tour[j + 1:], dtype=np.int64)
+
+
+def _edge_set(tour: np.ndarray) -> set[frozenset[int]]:
+    return {frozenset((int(a), int(b))) for a, b in zip(tour, np.roll(tour, -1), strict=True)}
+
+
+def test_merged_tour_makes_a_change_in_a_tour_that_moved_on():
+    """Two changes found on the same tour: the second, made in the tour the first left, keeps
+    both (its edges are the first's plus the second's, minus what each dropped); where another
+    change took an edge it dropped, or the two together close a shorter cycle, there is none."""
+    before = list(range(12))
+    first, second = _two_opt(before, 2, 4), _two_opt(before, 7, 9)
+    merged = merged_tour(first, np.array(before), second, 100)
+    assert merged is not None and sorted(merged.tolist()) == before
+    assert _edge_set(merged) == (_edge_set(first) | _edge_set(second)) - (
+        _edge_set(np.array(before)) - _edge_set(first)) - (
+        _edge_set(np.array(before)) - _edge_set(second))
+    # a new head (node 20 in place of 8) comes with its edges
+    head = np.array([*before[:8], 20, *before[9:]], dtype=np.int64)
+    merged = merged_tour(first, np.array(before), head, 100)
+    assert merged is not None and _edge_set(merged) == (_edge_set(first) - {
+        frozenset((7, 8)), frozenset((8, 9))}) | {frozenset((7, 20)), frozenset((20, 9))}
+    # both drop the edge (4, 5): the second's edge is no longer there
+    assert merged_tour(first, np.array(before), _two_opt(before, 5, 8), 100) is None
+    # crossing reversals: each alone a tour, together two cycles (0-1-4-8-..-11, 2-3-7-6-5)
+    assert merged_tour(_two_opt(before, 2, 4), np.array(before), _two_opt(before, 4, 7),
+                       100) is None
+
+
+def test_shared_region_passes_on_one_tour():
+    """Two threads re-solving regions of one tour: a valid tour, its cost the old one less the
+    saving, never below the DP's proven optimum, every region counted; ``progress`` hears each
+    saving, falling."""
+    import time
+
+    inst = generate_instance(11, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    problem = price(inst, 0.5)
+    tour = np.array(greedy_tour(problem, anchor_node(problem)), dtype=np.int64)
+    cost = problem.tour_cost(tour)
+    near = _Search(problem, LnsSettings(neighbours=4), np.random.default_rng(0)).near
+    told: list[float] = []
+    rngs = np.random.default_rng(0).spawn(2)
+    saved, regions = shared_region_passes(problem, tour, Regions(near), 6, 5,
+                                          time.perf_counter() + 0.5, rngs, told.append)
+    assert regions > 2
+    assert _valid(problem, tour)
+    assert problem.tour_cost(tour) == pytest.approx(cost - saved, rel=1e-9)
+    assert problem.tour_cost(tour) >= optimum - 1e-9 * optimum
+    assert saved > 0.0 and told == sorted(told, reverse=True)
+    assert told[-1] == pytest.approx(problem.tour_cost(tour), rel=1e-12)
 
 
 def test_default_run_ends_with_regions_above_large():
