@@ -307,7 +307,7 @@ class _Search:
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
                 if self.fail_passes and self.regions is not None:  # re-solve the base's regions
-                    gain = self.polish(run, base, deadline, rng, self.fail_passes)
+                    gain = self.polish(run, base, deadline, [rng], self.fail_passes)
                     if gain > 0.0:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
@@ -316,27 +316,28 @@ class _Search:
             run.converged = run.converged or run.trials >= s.trial_count
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
-               rng: np.random.Generator, passes: int | None = None) -> float:
-        """Region re-solves of ``tour`` (changed in place; ``path_clusters`` clusters each,
-        :func:`~gtsp_bench.solvers.heuristics.lns_paths.region_passes`) until ``deadline`` or
-        ``passes`` passes, counted in ``run``'s stats; returns the saving."""
+               rngs: list[np.random.Generator], passes: int | None = None) -> float:
+        """Region re-solves of ``tour`` (changed in place; ``path_clusters`` clusters each) until
+        ``deadline`` or ``passes`` passes, by one thread per generator of ``rngs``
+        (:func:`~gtsp_bench.solvers.heuristics.lns_paths.region_passes`; several, until
+        ``deadline`` only: :func:`~gtsp_bench.solvers.heuristics.lns_paths.shared_region_passes`),
+        counted in ``run``'s stats; returns the saving."""
         assert self.regions is not None
-        saved, count = region_passes(self.p, tour, self.regions, self.s.path_clusters,
-                                     self.s.path_iterations, deadline, rng, passes, self.progress)
+        size, iterations = self.s.path_clusters, self.s.path_iterations
+        if len(rngs) == 1:
+            saved, count = region_passes(self.p, tour, self.regions, size, iterations, deadline,
+                                         rngs[0], passes, self.progress)
+        else:
+            assert deadline is not None and passes is None
+            saved, count = shared_region_passes(self.p, tour, self.regions, size, iterations,
+                                                deadline, rngs, self.progress)
         run.windows, run.window_saving = run.windows + count, run.window_saving + saved
         return saved
 
     def finish(self, run: _Run, deadline: float, rngs: list[np.random.Generator]) -> None:
         """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``,
-        by one thread per generator of ``rngs`` (several: :func:`~.lns_paths.shared_region_passes`)."""
-        if len(rngs) == 1:
-            self.polish(run, run.best, deadline, rngs[0])
-        else:
-            assert self.regions is not None
-            saved, count = shared_region_passes(self.p, run.best, self.regions,
-                                                self.s.path_clusters, self.s.path_iterations,
-                                                deadline, rngs, self.progress)
-            run.windows, run.window_saving = run.windows + count, run.window_saving + saved
+        by one thread per generator of ``rngs`` (:meth:`polish`)."""
+        self.polish(run, run.best, deadline, rngs)
         run.best_cost = self.p.tour_cost(run.best)
         self.progress(run.best_cost)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import time
 
 import numpy as np
 import pytest
@@ -215,8 +216,6 @@ def test_shared_region_passes_on_one_tour():
     """Two threads re-solving regions of one tour: a valid tour, its cost the old one less the
     saving, never below the DP's proven optimum, every region counted; ``progress`` hears each
     saving, falling."""
-    import time
-
     inst = generate_instance(11, 3, seed=4)
     optimum = run_solver("dp", inst, 0.5).objective
     problem = price(inst, 0.5)
