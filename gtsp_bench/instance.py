@@ -263,7 +263,9 @@ def pair_distances(a: np.ndarray, b: np.ndarray, edge_weight_type: str) -> np.nd
         return _geo_distances(a, b)
     if edge_weight_type == "GEOM":
         return _geom_distances(a, b)
-    d2 = ((a - b) ** 2).sum(axis=-1)
+    # the two squares added in the order of a sum over the last axis: the same floats, without
+    # an (..., 2) temporary
+    d2 = (a[..., 0] - b[..., 0]) ** 2 + (a[..., 1] - b[..., 1]) ** 2
     if edge_weight_type == "EUCLIDEAN":
         return np.sqrt(d2)
     if edge_weight_type == "EUC_2D":

@@ -113,6 +113,18 @@ class Problem:
         dist[tails == heads] = 0.0
         return dist if self.edge_scale == 1.0 else self.edge_scale * dist
 
+    def edge_block(self, nodes: np.ndarray) -> np.ndarray:
+        """The costs of the edges among ``nodes``, ``(len(nodes), len(nodes))``, row = tail: the
+        same numbers as :meth:`edge_costs` of every pair, by one broadcast over the coordinates on
+        a planar rule (no gathered copy of every pair's points)."""
+        nodes = np.asarray(nodes, dtype=np.int64)
+        if self._from_matrix:
+            return self.edge_cost[np.ix_(nodes, nodes)]
+        pts = self.instance.node_points[nodes]
+        dist = pair_distances(pts[:, None, :], pts[None, :, :], self.instance.edge_weight_type)
+        dist[nodes[:, None] == nodes[None, :]] = 0.0
+        return dist if self.edge_scale == 1.0 else self.edge_scale * dist
+
     def edge_row(self, i: int) -> np.ndarray:
         """``edge_cost[i]``: read from :attr:`edge_cost` once it is built or when the rule is not
         planar, else computed from the coordinates (the same numbers as the matrix holds: the same

@@ -77,8 +77,8 @@ def test_asymmetric_problem_keeps_the_direction():
 
 @pytest.mark.parametrize("rule", ["uav", "EUC_2D", "CEIL_2D", "ATT", "GEO"])
 def test_edges_before_the_matrix_are_its_numbers(rule):
-    """edge_row, edge_costs and tour_cost give the matrix's numbers before it is built (from the
-    coordinates on planar rules, without building it; from the matrix on the others)."""
+    """edge_row, edge_costs, edge_block and tour_cost give the matrix's numbers before it is built
+    (from the coordinates on planar rules, without building it; from the matrix on the others)."""
     rng = np.random.default_rng(7)
     if rule == "uav":
         inst, omega = generate_instance(6, 5, seed=3), 0.4
@@ -92,7 +92,10 @@ def test_edges_before_the_matrix_are_its_numbers(rule):
     pairs = problem.edge_costs(tails, heads)
     tour = np.array([c[0] for c in problem.clusters])
     before = problem.tour_cost(tour)
+    some = rng.permutation(m)[:9]
+    block = problem.edge_block(some)
     assert ("edge_cost" in problem.__dict__) == (rule in ("ATT", "GEO"))
     assert np.array_equal(rows, problem.edge_cost)
     assert np.array_equal(pairs, problem.edge_cost[tails, heads])
     assert before == problem.tour_cost(tour)
+    assert np.array_equal(block, problem.edge_cost[np.ix_(some, some)])

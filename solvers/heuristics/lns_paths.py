@@ -99,8 +99,8 @@ def improve_region(problem: Problem, tour: np.ndarray, positions: np.ndarray, it
     sizes = np.array([1] * (2 * s) + [len(g) for g in groups], dtype=np.int64)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     cluster_of = np.repeat(np.arange(len(sizes), dtype=np.int64), sizes)
-    m, e = len(nodes), 2 * s
-    edge = problem.edge_costs(np.repeat(nodes, m), np.tile(nodes, m)).reshape(m, m)
+    e = 2 * s
+    edge = problem.edge_block(nodes)
     np.fill_diagonal(edge, 0.0)
     big = old  # a cycle without some outside part costs >= (2 s + 2) big > 2 s big + old
     edge[:e, :] += big
