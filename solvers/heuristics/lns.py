@@ -316,28 +316,31 @@ class _Search:
             run.converged = run.converged or run.trials >= s.trial_count
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
-               rngs: list[np.random.Generator], passes: int | None = None) -> float:
+               rngs: list[np.random.Generator], passes: int | None = None,
+               temperature: float = 1.0) -> float:
         """Region re-solves of ``tour`` (changed in place; ``path_clusters`` clusters each) until
         ``deadline`` or ``passes`` passes, by one thread per generator of ``rngs``
         (:func:`~gtsp_bench.solvers.heuristics.lns_paths.region_passes`; several, until
         ``deadline`` only: :func:`~gtsp_bench.solvers.heuristics.lns_paths.shared_region_passes`),
+        each region's annealing trial starting at ``temperature`` times its paths' mean edge,
         counted in ``run``'s stats; returns the saving."""
         assert self.regions is not None
         size, iterations = self.s.path_clusters, self.s.path_iterations
         if len(rngs) == 1:
             saved, count = region_passes(self.p, tour, self.regions, size, iterations, deadline,
-                                         rngs[0], passes, self.progress)
+                                         rngs[0], passes, self.progress, temperature)
         else:
             assert deadline is not None and passes is None
             saved, count = shared_region_passes(self.p, tour, self.regions, size, iterations,
-                                                deadline, rngs, self.progress)
+                                                deadline, rngs, self.progress, temperature)
         run.windows, run.window_saving = run.windows + count, run.window_saving + saved
         return saved
 
     def finish(self, run: _Run, deadline: float, rngs: list[np.random.Generator]) -> None:
         """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``,
-        by one thread per generator of ``rngs`` (:meth:`polish`)."""
-        self.polish(run, run.best, deadline, rngs)
+        by one thread per generator of ``rngs`` (:meth:`polish`), their trials starting at
+        ``path_temperature`` (the re-solves after a failed trial start at 1.0)."""
+        self.polish(run, run.best, deadline, rngs, temperature=self.s.path_temperature)
         run.best_cost = self.p.tour_cost(run.best)
         self.progress(run.best_cost)
 
@@ -430,14 +433,15 @@ class Lns:
         First tours raced (>= 1; default 1, no race): greedy, macro (planar instances), then
         random insertion, each improved by the local search and one short trial of
         ``start_iterations`` (>= 1) iterations per cluster; the trials start from the best.
-    paths, path_clusters, path_iterations
+    paths, path_clusters, path_iterations, path_temperature
         Share of the time limit, in [0, 1] (default 0.3, and 0.8 above ``FAIL_TO`` clusters:
         :meth:`LnsSettings.path_share_for`), kept for region re-solves of the best
         tour at the end (above ``LARGE`` clusters, symmetric costs, timed, effort ``budget``): the
         ``path_clusters`` (>= 2, default 80) clusters nearest a
         random one, the tour's paths through them re-solved as a small GTSP with
-        ``path_iterations`` (>= 0, default 5) iterations per cluster
-        (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
+        ``path_iterations`` (>= 0, default 5) iterations per cluster, in the end phase an annealing
+        trial that starts at ``path_temperature`` (>= ``end_temperature``, default 3.0) times the
+        paths' mean edge (1.0 in ``fail_passes``; :mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
         Passes of region re-solves over the start of each trial that did not improve it
         (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``FAIL_TO``
@@ -482,6 +486,7 @@ class Lns:
         macro_iterations: int = 5, macro_groups: float = 5.0, starts: int = 1,
         start_iterations: int = 5,
         paths: float | None = None, path_clusters: int = 80, path_iterations: int = 5,
+        path_temperature: float = 3.0,
         fail_passes: int | None = None, workers: int | None = None, exchange: float = 0.5,
         mirror: bool | None = None, plateau: bool | None = None, regional: float | None = None,
     ) -> None:
@@ -490,7 +495,8 @@ class Lns:
                                     neighbours, stop_at_convergence, restart_after, reopt_window,
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
-                                    path_clusters, path_iterations, fail_passes, workers,
+                                    path_clusters, path_iterations, path_temperature,
+                                    fail_passes, workers,
                                     exchange, effort, mirror, plateau, regional)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 

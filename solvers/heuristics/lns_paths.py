@@ -190,13 +190,13 @@ class Regions:
 
 def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
                   iterations: int, deadline: float | None, rng: np.random.Generator,
-                  passes: int | None = None, progress: Progress = no_progress
-                  ) -> tuple[float, int]:
+                  passes: int | None = None, progress: Progress = no_progress,
+                  temperature: float = 1.0) -> tuple[float, int]:
     """Re-solve regions of ``size`` clusters (at most ``len(tour) - 2``) round random clusters of
     ``tour`` (changed in place; :func:`improve_region`) until ``deadline`` (checked before each
     region) or ``passes`` passes of ``ceil(2 n / size)`` regions (no deadline and no ``passes``:
-    one pass), telling ``progress`` the tour's cost after each region that saved something.
-    Returns (the saving, the regions solved)."""
+    one pass), telling ``progress`` the tour's cost after each region that saved something;
+    ``temperature`` is :func:`improve_region`'s. Returns (the saving, the regions solved)."""
     n = len(tour)
     size = min(size, n - 2)
     if size < 2:
@@ -209,7 +209,7 @@ def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: in
     while (count is None or done < count) and not is_past(deadline):
         pos[problem.cluster_of[tour]] = np.arange(n)
         around = regions.around(int(rng.integers(n)), size)
-        gain = improve_region(problem, tour, pos[around], iterations)
+        gain = improve_region(problem, tour, pos[around], iterations, temperature)
         if gain > 0.0:
             saved += gain
             progress(problem.tour_cost(tour))
@@ -265,7 +265,8 @@ def merged_tour(current: np.ndarray, before: np.ndarray, after: np.ndarray,
 
 def shared_region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
                          iterations: int, deadline: float, rngs: list[np.random.Generator],
-                         progress: Progress = no_progress) -> tuple[float, int]:
+                         progress: Progress = no_progress, temperature: float = 1.0
+                         ) -> tuple[float, int]:
     """:func:`region_passes` on one tour by ``len(rngs)`` threads at once, until ``deadline``.
 
     Each thread re-solves a region of a copy of the tour as it was when the thread began
@@ -289,7 +290,7 @@ def shared_region_passes(problem: Problem, tour: np.ndarray, regions: Regions, s
             pos[problem.cluster_of[before]] = np.arange(n)
             after = before.copy()
             gain = improve_region(problem, after, pos[regions.around(int(rng.integers(n)), size)],
-                                  iterations)
+                                  iterations, temperature)
             with lock:
                 state["done"] += 1
                 if gain <= 0.0:

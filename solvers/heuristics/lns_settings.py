@@ -98,6 +98,7 @@ class LnsSettings:
     paths: float | None = None
     path_clusters: int = 80
     path_iterations: int = 5
+    path_temperature: float = 3.0
     fail_passes: int | None = None
     workers: int | None = None
     exchange: float = 0.5
@@ -141,6 +142,8 @@ class LnsSettings:
             check_float("paths", self.paths, 0.0, 1.0, open_low=False)
         check_int("path_clusters", self.path_clusters, 2)
         check_int("path_iterations", self.path_iterations, 0)
+        check_float("path_temperature", self.path_temperature, self.end_temperature, math.inf,
+                    open_low=False)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
         if self.regional is not None:
             check_float("regional", self.regional, 0.0, 1.0, open_low=False)
