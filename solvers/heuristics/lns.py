@@ -440,7 +440,7 @@ class Lns:
         ``path_clusters`` (>= 2, default 80) clusters nearest a
         random one, the tour's paths through them re-solved as a small GTSP with
         ``path_iterations`` (>= 0, default 5) iterations per cluster, in the end phase an annealing
-        trial that starts at ``path_temperature`` (>= ``end_temperature``, default 3.0) times the
+        trial that starts at ``path_temperature`` (>= 0.003, where it ends; default 3.0) times the
         paths' mean edge (1.0 in ``fail_passes``; :mod:`gtsp_bench.solvers.heuristics.lns_paths`).
     fail_passes
         Passes of region re-solves over the start of each trial that did not improve it

@@ -35,6 +35,8 @@ from gtsp_bench.solver import Progress, no_progress
 
 #: Neighbour-list length inside a region's sub-problem (lns's default on symmetric costs).
 NEIGHBOURS = 10
+#: Where a region's annealing trial ends, as a multiple of its paths' mean edge.
+END_TEMPERATURE = 0.003
 
 
 def path_cost(problem: Problem, nodes: np.ndarray) -> float:
@@ -73,7 +75,8 @@ def improve_region(problem: Problem, tour: np.ndarray, positions: np.ndarray, it
     iterations
         Iterations per cluster of the annealing trial (0: the local search only).
     temperature
-        The trial's start temperature as a multiple of the paths' mean edge (ends at 0.003 times).
+        The trial's start temperature as a multiple of the paths' mean edge (it ends at
+        ``END_TEMPERATURE`` times).
 
     Returns
     -------
@@ -123,7 +126,7 @@ def improve_region(problem: Problem, tour: np.ndarray, positions: np.ndarray, it
     if iterations > 0:
         mean = old / (len(xs) + s)
         count = max(100, iterations * k)
-        settings = kernels.trial_settings(count, count, temperature * mean, 0.003 * mean,
+        settings = kernels.trial_settings(count, count, temperature * mean, END_TEMPERATURE * mean,
                                           max(1, min(k - 2, 100, math.ceil(0.3 * k))),
                                           0.1 * mean, 0.1, 0)
         best, best_cost, _, _, _ = kernels.one_trial(t, cost, settings, count, edge, node, start,

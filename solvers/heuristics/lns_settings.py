@@ -24,6 +24,7 @@ import math
 from dataclasses import dataclass
 
 from gtsp_bench.solvers.heuristics.lns_islands import default_workers
+from gtsp_bench.solvers.heuristics.lns_paths import END_TEMPERATURE
 
 from gtsp_bench.checks import check_bool, check_choice, check_float, check_int
 from gtsp_bench.errors import InputError
@@ -142,8 +143,8 @@ class LnsSettings:
             check_float("paths", self.paths, 0.0, 1.0, open_low=False)
         check_int("path_clusters", self.path_clusters, 2)
         check_int("path_iterations", self.path_iterations, 0)
-        check_float("path_temperature", self.path_temperature, self.end_temperature, math.inf,
-                    open_low=False)
+        check_float("path_temperature", self.path_temperature, END_TEMPERATURE, math.inf,
+                    open_low=False)  # a region's trial ends there
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
         if self.regional is not None:
             check_float("regional", self.regional, 0.0, 1.0, open_low=False)
