@@ -191,6 +191,17 @@ class Regions:
         return np.array(queue[:size], dtype=np.int64)
 
 
+def random_region(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
+                  iterations: int, temperature: float, rng: np.random.Generator,
+                  pos: np.ndarray) -> float:
+    """:func:`improve_region` of the ``size`` clusters round a random cluster of ``tour``
+    (changed in place), ``pos`` a scratch array of ``len(tour)`` positions; returns the saving."""
+    n = len(tour)
+    pos[problem.cluster_of[tour]] = np.arange(n)
+    around = regions.around(int(rng.integers(n)), size)
+    return improve_region(problem, tour, pos[around], iterations, temperature)
+
+
 def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: int,
                   iterations: int, deadline: float | None, rng: np.random.Generator,
                   passes: int | None = None, progress: Progress = no_progress,
@@ -210,9 +221,7 @@ def region_passes(problem: Problem, tour: np.ndarray, regions: Regions, size: in
     saved, done = 0.0, 0
     pos = np.empty(n, dtype=np.int64)
     while (count is None or done < count) and not is_past(deadline):
-        pos[problem.cluster_of[tour]] = np.arange(n)
-        around = regions.around(int(rng.integers(n)), size)
-        gain = improve_region(problem, tour, pos[around], iterations, temperature)
+        gain = random_region(problem, tour, regions, size, iterations, temperature, rng, pos)
         if gain > 0.0:
             saved += gain
             progress(problem.tour_cost(tour))
@@ -290,10 +299,8 @@ def shared_region_passes(problem: Problem, tour: np.ndarray, regions: Regions, s
         while not is_past(deadline):
             with lock:
                 before, seen = tour.copy(), state["version"]
-            pos[problem.cluster_of[before]] = np.arange(n)
             after = before.copy()
-            gain = improve_region(problem, after, pos[regions.around(int(rng.integers(n)), size)],
-                                  iterations, temperature)
+            gain = random_region(problem, after, regions, size, iterations, temperature, rng, pos)
             with lock:
                 state["done"] += 1
                 if gain <= 0.0:
