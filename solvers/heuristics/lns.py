@@ -307,7 +307,8 @@ class _Search:
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
                 if self.fail_passes and self.regions is not None:  # re-solve the base's regions
-                    gain = self.polish(run, base, deadline, [rng], self.fail_passes)
+                    gain = self.polish(run, base, deadline, [rng], self.fail_passes,
+                                       temperature=s.fail_temperature)
                     if gain > 0.0:
                         base_cost = p.tour_cost(base)
                         if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
@@ -339,7 +340,7 @@ class _Search:
     def finish(self, run: _Run, deadline: float, rngs: list[np.random.Generator]) -> None:
         """The end phase (``paths``): region re-solves of ``run``'s best tour until ``deadline``,
         by one thread per generator of ``rngs`` (:meth:`polish`), their trials starting at
-        ``path_temperature`` (the re-solves after a failed trial start at 1.0)."""
+        ``path_temperature`` (the re-solves after a failed trial at ``fail_temperature``)."""
         self.polish(run, run.best, deadline, rngs, temperature=self.s.path_temperature)
         run.best_cost = self.p.tour_cost(run.best)
         self.progress(run.best_cost)
@@ -441,11 +442,13 @@ class Lns:
         random one, the tour's paths through them re-solved as a small GTSP with
         ``path_iterations`` (>= 0, default 5) iterations per cluster, in the end phase an annealing
         trial that starts at ``path_temperature`` (>= 0.003, where it ends; default 3.0) times the
-        paths' mean edge (1.0 in ``fail_passes``; :mod:`gtsp_bench.solvers.heuristics.lns_paths`).
-    fail_passes
+        paths' mean edge (:mod:`gtsp_bench.solvers.heuristics.lns_paths`).
+    fail_passes, fail_temperature
         Passes of region re-solves over the start of each trial that did not improve it
         (symmetric costs, any size; >= 0; default 1 from ``FAIL_FROM`` (200) to ``FAIL_TO``
-        (1,500) clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`).
+        (1,500) clusters with effort ``budget``, else 0: :meth:`LnsSettings.fail_passes_for`),
+        their trials starting at ``fail_temperature`` (>= 0.003; default 3.0) times the paths'
+        mean edge.
     workers, exchange
         Threads of a timed search with effort ``budget`` (>= 1; default
         :func:`~gtsp_bench.solvers.heuristics.lns_islands.default_workers`), run as
@@ -487,8 +490,9 @@ class Lns:
         start_iterations: int = 5,
         paths: float | None = None, path_clusters: int = 80, path_iterations: int = 5,
         path_temperature: float = 3.0,
-        fail_passes: int | None = None, workers: int | None = None, exchange: float = 0.5,
-        mirror: bool | None = None, plateau: bool | None = None, regional: float | None = None,
+        fail_passes: int | None = None, fail_temperature: float = 3.0,
+        workers: int | None = None, exchange: float = 0.5, mirror: bool | None = None,
+        plateau: bool | None = None, regional: float | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
@@ -496,7 +500,7 @@ class Lns:
                                     fit_to_time, fit_trials, points, quadrants, macro,
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, path_temperature,
-                                    fail_passes, workers,
+                                    fail_passes, fail_temperature, workers,
                                     exchange, effort, mirror, plateau, regional)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 

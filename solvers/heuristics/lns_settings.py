@@ -101,6 +101,7 @@ class LnsSettings:
     path_iterations: int = 5
     path_temperature: float = 3.0
     fail_passes: int | None = None
+    fail_temperature: float = 3.0
     workers: int | None = None
     exchange: float = 0.5
     effort: str | None = None
@@ -145,6 +146,8 @@ class LnsSettings:
         check_int("path_iterations", self.path_iterations, 0)
         check_float("path_temperature", self.path_temperature, END_TEMPERATURE, math.inf,
                     open_low=False)  # a region's trial ends there
+        check_float("fail_temperature", self.fail_temperature, END_TEMPERATURE, math.inf,
+                    open_low=False)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
         if self.regional is not None:
             check_float("regional", self.regional, 0.0, 1.0, open_low=False)

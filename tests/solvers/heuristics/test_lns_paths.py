@@ -380,6 +380,7 @@ def test_fail_passes_on_a_small_cycle_never_below_dp_optimum(seed):
     ({"path_iterations": -1}, "path_iterations must be an integer >= 0"),
     ({"path_temperature": 0.001}, "path_temperature must be a number >= 0.003"),
     ({"fail_passes": -1}, "fail_passes must be an integer >= 0"),
+    ({"fail_temperature": 0.0}, "fail_temperature must be a number >= 0.003"),
 ])
 def test_bad_options_rejected(options, message):
     """Invalid region settings raise InputError naming the setting."""
@@ -387,9 +388,9 @@ def test_bad_options_rejected(options, message):
         get_solver("lns", **options)
 
 
-def test_end_phase_trials_start_at_path_temperature(monkeypatch):
+def test_region_trials_start_at_their_phase_temperature(monkeypatch):
     """The end phase's region trials start at path_temperature, the re-solves after a failed
-    trial at 1.0; the tour stays valid and priced as the evaluator prices it."""
+    trial at fail_temperature; the tour stays valid and priced as the evaluator prices it."""
     from gtsp_bench.solvers.heuristics import lns_paths
 
     seen: list[float] = []
@@ -402,8 +403,9 @@ def test_end_phase_trials_start_at_path_temperature(monkeypatch):
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     r = run_solver(get_solver("lns", paths=0.5, path_clusters=40, path_iterations=1,
-                              path_temperature=5.0, fail_passes=1, iterations=100,
-                              effort="budget", workers=1), inst, 0.5, seed=1, time_limit=2.0)
-    assert 5.0 in seen and set(seen) <= {1.0, 5.0}
+                              path_temperature=5.0, fail_passes=1, fail_temperature=2.0,
+                              iterations=100, effort="budget", workers=1),
+                   inst, 0.5, seed=1, time_limit=2.0)
+    assert 5.0 in seen and 2.0 in seen and set(seen) == {2.0, 5.0}
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
