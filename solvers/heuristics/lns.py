@@ -317,8 +317,8 @@ class _Search:
             run.converged = run.converged or run.trials >= s.trial_count
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
-               rngs: list[np.random.Generator], passes: int | None = None,
-               temperature: float = 1.0) -> float:
+               rngs: list[np.random.Generator], passes: int | None = None, *,
+               temperature: float) -> float:
         """Region re-solves of ``tour`` (changed in place; ``path_clusters`` clusters each) until
         ``deadline`` or ``passes`` passes, by one thread per generator of ``rngs``
         (:func:`~gtsp_bench.solvers.heuristics.lns_paths.region_passes`; several, until

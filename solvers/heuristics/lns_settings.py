@@ -144,10 +144,8 @@ class LnsSettings:
             check_float("paths", self.paths, 0.0, 1.0, open_low=False)
         check_int("path_clusters", self.path_clusters, 2)
         check_int("path_iterations", self.path_iterations, 0)
-        check_float("path_temperature", self.path_temperature, END_TEMPERATURE, math.inf,
-                    open_low=False)  # a region's trial ends there
-        check_float("fail_temperature", self.fail_temperature, END_TEMPERATURE, math.inf,
-                    open_low=False)
+        for name in ("path_temperature", "fail_temperature"):  # a region's trial ends at the low
+            check_float(name, getattr(self, name), END_TEMPERATURE, math.inf, open_low=False)
         check_float("exchange", self.exchange, 0.0, 1.0, open_low=False)
         if self.regional is not None:
             check_float("regional", self.regional, 0.0, 1.0, open_low=False)

@@ -406,6 +406,6 @@ def test_region_trials_start_at_their_phase_temperature(monkeypatch):
                               path_temperature=5.0, fail_passes=1, fail_temperature=2.0,
                               iterations=100, effort="budget", workers=1),
                    inst, 0.5, seed=1, time_limit=2.0)
-    assert 5.0 in seen and 2.0 in seen and set(seen) == {2.0, 5.0}
+    assert set(seen) == {2.0, 5.0}  # both phases ran, each at its own start
     assert sorted(r.order) == list(range(n))
     assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
