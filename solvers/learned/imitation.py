@@ -5,9 +5,11 @@ better spent imitating good tours (as LEHD and BQ-NCO train). A run:
 
 1. **Labels**: for each ``(K, count, area)`` of the recipe's mix, instances
    ``instance_set(count, K, label_seed, area=area)`` (a seed no test set uses), omega of instance
-   i drawn from ``[label_seed, K, i]`` uniform in ``[0, omega_max]``, each solved by ``lns``
-   with ``stop_at_convergence``. Labels are cached (``CKPT.labels.npz``; reused when the mix
-   matches, so a second run skips them).
+   i drawn from ``[label_seed, K, i]`` uniform in ``[0, omega_max]``; for a
+   ``(K, count, area, "tiled")`` entry, :func:`~.tiled.tiled_set` instances (clusters that tile
+   the plane, as GTSPLIB's) at omega 0. Each is solved by ``lns`` with ``stop_at_convergence``.
+   Labels are cached (``CKPT.labels.npz``; reused when the mix matches, so a second run skips
+   them).
 2. **States**: every label tour is walked from the depot, forwards and backwards (both
    directions cost the same with optimal heads), through the same :class:`~.local.Walk` that
    decoding uses; each step's view and the position of the tour's next cluster in it is one
@@ -48,6 +50,7 @@ import torch
 from gtsp_bench.solvers.learned.checkpoint import save_policy
 from gtsp_bench.solvers.learned.env import EnvBatch, env_from_instances, optimal_heads_batch
 from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, turn
+from gtsp_bench.solvers.learned.tiled import tiled_set
 from torch import nn
 
 from gtsp_bench.checks import arg_float, arg_seed, check_choice, check_float, check_int, check_seed
@@ -58,6 +61,14 @@ from gtsp_bench.generator import instance_set
 #: Seeds of the validation set (never used for training or testing).
 VAL_SEED = 818_273
 LOG_COLUMNS = ("step", "loss", "accuracy", "lr", "val_gap_pct", "wall_s")
+#: A label set: ``(K, instances, area)`` (the UAV generator's squares) or ``(K, instances, area,
+#: "tiled")`` (:mod:`~.tiled`; its area is ignored).
+Entry = tuple[int, int, float] | tuple[int, int, float, str]
+
+
+def _entry(e: Entry) -> tuple[int, int, float, bool]:
+    """K, instances, area and whether tiled, of a label-set entry."""
+    return int(e[0]), int(e[1]), float(e[2]), len(e) > 3 and e[3] == "tiled"  # type: ignore[misc]
 
 
 @dataclass(frozen=True)
@@ -69,7 +80,8 @@ class ImitationConfig:
     recipe
         Name in :data:`RECIPES` these settings start from.
     mix
-        ``(K, instances, area)`` label sets: K clusters, how many instances, square side (m).
+        ``(K, instances, area)`` label sets: K clusters, how many instances, square side (m); a
+        fourth element ``"tiled"`` makes a set of :mod:`~.tiled` instances.
     nodes
         N, nodes per cluster.
     omega_max
@@ -82,13 +94,14 @@ class ImitationConfig:
         Samples per step, peak learning rate, training wall budget (s), step cap, seed, torch
         threads.
     val
-        ``(K, instances, area)`` of the validation set.
+        ``(K, instances, area)`` of the validation set (omega 0.3 and 0.6 in turn), or a tiled
+        entry (omega 0).
     val_every, log_every
         Steps between validations and between log rows.
     """
 
     recipe: str
-    mix: tuple[tuple[int, int, float], ...]
+    mix: tuple[Entry, ...]
     nodes: int = 20
     omega_max: float = 0.9
     label_seed: int = 71_000
@@ -99,14 +112,17 @@ class ImitationConfig:
     steps: int = 1_000_000
     seed: int = 0
     threads: int = 1
-    val: tuple[int, int, float] = (50, 24, 1500.0)
+    val: Entry = (50, 24, 1500.0)
     val_every: int = 500
     log_every: int = 100
 
     def __post_init__(self) -> None:
         if not self.mix:
             raise InputError("the label mix is empty")
-        for k, n, area in (*self.mix, self.val):
+        for e in (*self.mix, self.val):
+            if len(e) not in (3, 4) or (len(e) == 4 and e[3] != "tiled"):
+                raise InputError(f"a label set is (K, instances, area[, 'tiled']), got {e!r}")
+            k, n, area, _ = _entry(e)
             check_int("K", k, 2)
             check_int("instances", n, 1)
             check_float("area", area, 0.0, math.inf)
@@ -154,6 +170,14 @@ RECIPES: dict[str, ImitationConfig] = {
         model_options={"dim": 96, "n_layers": 3, "ff": 192},
         batch=1024, lr=1e-3, max_time=165.0, val_every=2000, log_every=200,
     ),
+    # distance-only problems (GTSPLIB's planar files): clusters that tile the plane, omega 0
+    "local-tiled": ImitationConfig(
+        recipe="local-tiled",
+        mix=((20, 2000, 1000.0, "tiled"), (40, 1500, 1000.0, "tiled"),
+             (80, 600, 1000.0, "tiled"), (120, 150, 1000.0, "tiled")),
+        val=(60, 24, 1000.0, "tiled"),
+        max_time=1200.0,
+    ),
     "local-small": ImitationConfig(
         recipe="local-small",
         mix=((10, 300, 1000.0), (20, 600, 1000.0), (30, 300, 1200.0)),
@@ -189,8 +213,11 @@ _WARM = False
 
 
 def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max: float,
-              ) -> tuple[list[Any], np.ndarray]:
-    """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``)."""
+              tiled: bool = False) -> tuple[list[Any], np.ndarray]:
+    """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``; 0 for
+    a tiled set)."""
+    if tiled:
+        return tiled_set(count, k, seed), np.zeros(count)
     insts = instance_set(count, k, seed, nodes, area=area)
     omegas = np.array([np.random.default_rng([seed, k, i, 7]).uniform(0.0, omega_max)
                        for i in range(count)])
@@ -234,7 +261,7 @@ def solve_labels(insts: Sequence[Any], omegas: Sequence[float], say: Any = None,
 
 
 def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = None,
-                         workers: int = 1) -> tuple[dict[tuple[int, int, float], np.ndarray], float]:
+                         workers: int = 1) -> tuple[dict[Entry, np.ndarray], float]:
     """Label orders per mix entry, from ``cache`` when it holds that entry; returns them and the
     seconds spent solving new ones (new ones are added to the cache)."""
     stored: dict[str, np.ndarray] = {}
@@ -242,18 +269,20 @@ def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = No
         with np.load(cache) as f:
             stored = {key: f[key] for key in f.files}
     out, spent = {}, 0.0
-    for k, n, area in cfg.mix:
-        key = f"K{k}_n{n}_a{area:g}_s{cfg.label_seed}_w{cfg.omega_max:g}_N{cfg.nodes}"
+    for e in cfg.mix:
+        k, n, area, tiled = _entry(e)
+        key = (f"K{k}_n{n}_tiled_s{cfg.label_seed}" if tiled else
+               f"K{k}_n{n}_a{area:g}_s{cfg.label_seed}_w{cfg.omega_max:g}_N{cfg.nodes}")
         if key not in stored:
             t = time.perf_counter()
-            insts, omegas = label_set(k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
+            insts, omegas = label_set(k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max, tiled)
             stored[key] = solve_labels(insts, omegas, say, workers)[0]
             spent += time.perf_counter() - t
             if cache is not None:
                 buf = io.BytesIO()
                 np.savez_compressed(buf, **stored)
                 atomic_write_bytes(cache, buf.getvalue())
-        out[(k, n, area)] = stored[key]
+        out[e] = stored[key]
     return out, spent
 
 
@@ -301,12 +330,13 @@ def walk_states(env: EnvBatch, orders: torch.Tensor, k: int) -> tuple[Samples, f
     return Samples.join(parts), seen / max(total, 1)
 
 
-def _chunk_states(task: tuple[ImitationConfig, int, int, float, int, np.ndarray, int],
+def _chunk_states(task: tuple[ImitationConfig, Entry, int, np.ndarray, int],
                   ) -> tuple[list[Samples], float]:
     """The states of label tours ``lo .. lo + len(orders)`` of one mix entry, both directions."""
-    cfg, kk, n, area, lo, orders, k = task
+    cfg, e, lo, orders, k = task
     torch.set_num_threads(1)
-    insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max)
+    kk, n, area, tiled = _entry(e)
+    insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max, tiled)
     env = env_from_instances(insts[lo:lo + len(orders)], omegas[lo:lo + len(orders)].tolist())
     o = torch.from_numpy(orders)
     parts, share = [], 0.0
@@ -316,17 +346,18 @@ def _chunk_states(task: tuple[ImitationConfig, int, int, float, int, np.ndarray,
     return parts, share
 
 
-def build_samples(cfg: ImitationConfig, labels: dict[tuple[int, int, float], np.ndarray], k: int,
+def build_samples(cfg: ImitationConfig, labels: dict[Entry, np.ndarray], k: int,
                   pool: Any = None) -> tuple[Samples, dict[str, float]]:
     """Every state of every label tour in both directions (in ``pool`` when given, the same
-    states in the same order); the in-view share per K."""
-    tasks = [(cfg, kk, n, area, lo, orders[lo:lo + 500], k)
-             for (kk, n, area), orders in labels.items() for lo in range(0, n, 500)]
+    states in the same order); the in-view share per K (``K20t`` for a tiled set)."""
+    tasks = [(cfg, e, lo, orders[lo:lo + 500], k)
+             for e, orders in labels.items() for lo in range(0, _entry(e)[1], 500)]
     mapper: Callable[..., Any] = pool.map if pool is not None else lambda f, t: list(map(f, t))
     parts, coverage = [], {}
     for task, (chunk, share) in zip(tasks, mapper(_chunk_states, tasks), strict=True):
         parts.extend(chunk)
-        coverage[str(task[1])] = share
+        kk, _, _, tiled = _entry(task[1])
+        coverage[f"{kk}t" if tiled else str(kk)] = share
     return Samples.join(parts), coverage
 
 
@@ -351,14 +382,17 @@ def imitation_loss(model: LocalPolicy, batch: Samples, maps: torch.Tensor,
     return loss, acc
 
 
-def greedy_gap(model: LocalPolicy, env: EnvBatch, ref: torch.Tensor) -> float:
-    """Mean gap (%) of one-start greedy decoding with optimal heads to ``ref``."""
+def greedy_gap(model: LocalPolicy, env: EnvBatch, ref: torch.Tensor,
+               base: torch.Tensor | float = 0.0) -> float:
+    """Mean gap (%) of one-start greedy decoding with optimal heads to ``ref``, both less
+    ``base`` (a cost no tour avoids: a tiled set's hover energies, so that its gap is the
+    distance's)."""
     model.eval()
     with torch.inference_mode():
         order, _ = model.decode(env, starts=1)
         cost = optimal_heads_batch(env, order)[1]
     model.train()
-    return float(((cost / ref - 1) * 100).mean())
+    return float((((cost - base) / (ref - base) - 1) * 100).mean())
 
 
 # ---------------------------------------------------------------------- run
@@ -407,12 +441,14 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
             pool.close()
             pool.join()
     say(f"{len(data)} states; next cluster in view: {coverage}")
-    vk, vn, varea = cfg.val
-    vinsts = instance_set(vn, vk, VAL_SEED, cfg.nodes, area=varea)
-    vomegas = [0.3 if i % 2 == 0 else 0.6 for i in range(vn)]
+    vk, vn, varea, vtiled = _entry(cfg.val)
+    vinsts = label_set(vk, vn, varea, VAL_SEED, cfg.nodes, 0.0, vtiled)[0]
+    vomegas = [0.0 if vtiled else 0.3 if i % 2 == 0 else 0.6 for i in range(vn)]
     vref = solve_labels(vinsts, vomegas)[1]
     venv = env_from_instances(vinsts, vomegas)
     vref_t = torch.from_numpy(vref)
+    # at omega 0 a node's cost is its cluster's hover energy: the same for every tour
+    vbase = venv.node_cost.min(-1).values.sum(-1) if vtiled else 0.0
     prep_s = time.perf_counter() - start
     gen = torch.Generator().manual_seed(cfg.seed)
     model.to(dev)
@@ -430,7 +466,7 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
         nonlocal best, best_step
         cpu = LocalPolicy(**cfg.model_options)
         cpu.load_state_dict({k: v.cpu() for k, v in model.state_dict().items()})
-        gap = greedy_gap(cpu, venv, vref_t)
+        gap = greedy_gap(cpu, venv, vref_t, vbase)
         if gap < best:
             best, best_step = gap, step
             save_policy(cpu, paths["policy"])
@@ -494,7 +530,9 @@ def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, 
         "wall_s": round(train_s, 1),
         "val_gap_pct": best,
         "validation": {"seed": VAL_SEED, "clusters": cfg.val[0], "instances": cfg.val[1],
-                       "area": cfg.val[2], "omega": [0.3, 0.6], "reference": "lns stop_at_convergence",
+                       "area": cfg.val[2], "tiled": _entry(cfg.val)[3],
+                       "omega": [0.0] if _entry(cfg.val)[3] else [0.3, 0.6],
+                       "reference": "lns stop_at_convergence",
                        "decoding": "greedy, one start, optimal heads"},
         "states": n_states,
         "next_in_view": coverage,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 torch = pytest.importorskip("torch")
@@ -79,7 +80,29 @@ def test_tiny_run_writes_policy_log_and_meta(tmp_path):
     assert train(cfg, out, progress=False)["label_wall_s"] == 0.0
 
 
+def test_tiled_entries_label_at_omega_zero(tmp_path):
+    """A tiled mix entry: tiled instances at omega 0, their own cache key, a tiled validation
+    whose gap is the distance's (hover energies left out), all alongside a squares entry."""
+    from gtsp_bench.solvers.learned.imitation import label_set
+
+    insts, omegas = label_set(6, 3, 1000.0, 71_000, 20, 0.9, tiled=True)
+    assert [i.name for i in insts] == [f"tiled-K6-s71000-{i:03d}" for i in range(3)]
+    assert (omegas == 0).all()
+    cfg = get_recipe("local-small", mix=((5, 2, 1000.0), (6, 3, 1000.0, "tiled")), max_time=1.0,
+                     steps=2, val=(6, 2, 1000.0, "tiled"), val_every=2, log_every=2, batch=8,
+                     model_options={"dim": 16, "n_heads": 2, "n_layers": 1, "ff": 32, "k": 4})
+    meta = train(cfg, tmp_path / "p.pt", progress=False)
+    assert set(meta["next_in_view"]) == {"5", "6t"}
+    assert meta["validation"]["tiled"] and meta["validation"]["omega"] == [0.0]
+    with np.load(tmp_path / "p.labels.npz") as f:
+        assert sorted(f.files) == ["K5_n2_a1000_s71000_w0.9_N20", "K6_n3_tiled_s71000"]
+    # a one-start greedy tour is never below lns's, distance alone
+    assert meta["val_gap_pct"] >= -1e-9
+
+
 def test_bad_settings(capsys):
+    with pytest.raises(InputError, match="tiled"):
+        get_recipe("local", mix=((10, 5, 1000.0, "rings"),))
     with pytest.raises(InputError, match="test set's seed"):
         get_recipe("local", label_seed=5_000)
     with pytest.raises(InputError, match="recipe"):
