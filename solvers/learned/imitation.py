@@ -518,6 +518,7 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
 def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, best_step: int,
           label_s: float, prep_s: float, train_s: float, coverage: dict[str, float],
           n_states: int, device: str = "cpu", workers: int = 1) -> dict[str, Any]:
+    val_tiled = _entry(cfg.val)[3]
     return {
         "model": "local",
         "command": cfg.command(paths["policy"], device, workers),
@@ -530,8 +531,8 @@ def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, 
         "wall_s": round(train_s, 1),
         "val_gap_pct": best,
         "validation": {"seed": VAL_SEED, "clusters": cfg.val[0], "instances": cfg.val[1],
-                       "area": cfg.val[2], "tiled": _entry(cfg.val)[3],
-                       "omega": [0.0] if _entry(cfg.val)[3] else [0.3, 0.6],
+                       "area": cfg.val[2], "tiled": val_tiled,
+                       "omega": [0.0] if val_tiled else [0.3, 0.6],
                        "reference": "lns stop_at_convergence",
                        "decoding": "greedy, one start, optimal heads"},
         "states": n_states,

@@ -55,13 +55,10 @@ def farthest_clusters(xy: np.ndarray, n_clusters: int, first: int) -> list[np.nd
     """Fischetti, Salazar and Toth's clustering: centres by farthest-point insertion from point
     ``first``, each point to its nearest centre. Returns each cluster's point indices, clusters
     in the order their centres were chosen (none is empty: a centre is in its own cluster)."""
-    centres = [first]
-    near = np.linalg.norm(xy - xy[first], axis=1)
+    near = np.linalg.norm(xy - xy[first], axis=1)  # each point's distance to its centre
     owner = np.zeros(len(xy), dtype=np.int64)
     for c in range(1, n_clusters):
-        nxt = int(np.argmax(near))
-        centres.append(nxt)
-        d = np.linalg.norm(xy - xy[nxt], axis=1)
+        d = np.linalg.norm(xy - xy[int(np.argmax(near))], axis=1)
         closer = d < near
         owner[closer] = c
         near = np.minimum(near, d)
