@@ -33,7 +33,8 @@ Two optional keywords of ``solve`` are declared the same way, by naming them in 
     warm start with one :class:`~gtsp_bench.errors.InputError` line.
 
 A solver that runs threads of its own may run as many as :data:`SOLVE_THREADS_VAR` says where it
-is set (a benchmark's worker processes set it), at most :func:`usable_cores`.
+is set (a benchmark's worker processes set it), at most :func:`usable_cores`
+(:func:`allowed_threads`).
 """
 
 from __future__ import annotations
@@ -277,8 +278,24 @@ def usable_cores() -> int:
     return max(1, cores or 1)
 
 
+def allowed_threads(limit: int, environ: Mapping[str, str] | None = None,
+                    cores: int | None = None) -> int:
+    """Threads a solve may run of its own: at most ``limit`` and the cores this process may run
+    on (``cores``, default :func:`usable_cores`), and at most what :data:`SOLVE_THREADS_VAR` says
+    where it is set (a benchmark's worker processes get the cores over the workers: with
+    ``--jobs 1`` on two cores, 2), else ``OMP_NUM_THREADS`` (a setting that is not a number is
+    ignored); at least 1."""
+    env = os.environ if environ is None else environ
+    top = max(1, min(limit, usable_cores() if cores is None else cores))
+    for var in (SOLVE_THREADS_VAR, "OMP_NUM_THREADS"):
+        text = env.get(var, "").strip()
+        if text.isdigit() and int(text) >= 1:
+            return min(top, int(text))
+    return top
+
+
 __all__ = [
     "REL_TOL", "SOLVE_THREADS_VAR", "STATUSES", "BatchSolver", "Progress", "Result", "Solution", "Solver",
-    "TrajectoryPoint", "handles_asymmetric", "is_capped", "no_progress", "solves_batches",
+    "TrajectoryPoint", "allowed_threads", "handles_asymmetric", "is_capped", "no_progress", "solves_batches",
     "takes_keyword", "usable_cores",
 ]

@@ -128,6 +128,19 @@ def test_the_default_time_limit_is_given_in_one_place(tiny):
     assert is_capped(get_solver("lns")) and not is_capped(get_solver("dp"))
 
 
+def test_allowed_threads_follow_the_limit_the_cores_and_the_environment():
+    """At most the limit and the cores; a benchmark worker's variable, else OMP_NUM_THREADS,
+    caps it; a setting that is not a number is ignored; never below 1."""
+    from gtsp_bench.solver import SOLVE_THREADS_VAR, allowed_threads
+
+    assert allowed_threads(2, {}, cores=16) == 2
+    assert allowed_threads(4, {}, cores=3) == 3
+    assert allowed_threads(0, {}, cores=3) == 1
+    assert allowed_threads(8, {SOLVE_THREADS_VAR: "2", "OMP_NUM_THREADS": "1"}, cores=8) == 2
+    assert allowed_threads(8, {"OMP_NUM_THREADS": "3"}, cores=8) == 3
+    assert allowed_threads(8, {SOLVE_THREADS_VAR: "all", "OMP_NUM_THREADS": "0"}, cores=8) == 8
+
+
 def test_result_json_shape(tiny):
     """to_dict has exactly the CLI's keys."""
     d = run_solver(Fixed(), tiny, 0.5).to_dict()

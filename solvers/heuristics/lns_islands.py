@@ -17,7 +17,6 @@ and numba keeps one random state per thread, so the threads run on separate core
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
@@ -25,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 
-from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
+from gtsp_bench.solver import allowed_threads
 
 if TYPE_CHECKING:
     from gtsp_bench.solvers.heuristics.lns import _Run, _Search
@@ -37,16 +36,9 @@ AUTO_WORKERS = 2
 
 def default_workers(environ: Mapping[str, str] | None = None, cores: int | None = None) -> int:
     """The default ``workers``: :data:`AUTO_WORKERS`, at most the cores this process may run on
-    and at most the threads a solve may run where the environment says so: ``GTSP_BENCH_SOLVE_THREADS``
-    (a benchmark's worker processes get the cores over the workers: with ``--jobs 1`` on two
-    cores, 2), else ``OMP_NUM_THREADS`` (a setting that is not a number is ignored)."""
-    env = os.environ if environ is None else environ
-    limit = min(AUTO_WORKERS, max(1, usable_cores() if cores is None else cores))
-    for var in (SOLVE_THREADS_VAR, "OMP_NUM_THREADS"):
-        text = env.get(var, "").strip()
-        if text.isdigit() and int(text) >= 1:
-            return min(limit, int(text))
-    return limit
+    and at most the threads a solve may run where the environment says so
+    (:func:`gtsp_bench.solver.allowed_threads`)."""
+    return allowed_threads(AUTO_WORKERS, environ, cores)
 
 
 def island_kinds(search: _Search, workers: int) -> list[str]:

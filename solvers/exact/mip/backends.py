@@ -125,6 +125,11 @@ class Backend(Protocol):
         is far away."""
         ...
 
+    def use_threads(self, threads: int) -> None:
+        """Solve with ``threads`` threads from now on (set before the first solve; the search
+        asks it of big models only)."""
+        ...
+
     def solve_lp(self, time_limit: float, cutoff: float = math.inf,
                  iterations: int | None = None) -> LpResult:
         """Solve the LP relaxation; it may stop early once its bound passes ``cutoff``, and
@@ -241,6 +246,14 @@ class LpModel:
 
 
 # ---------------------------------------------------------------------- HiGHS
+#: HiGHS's ``simplex_strategy`` of its parallel dual simplex.
+PAMI = 2
+#: The threads of HiGHS's task scheduler, one per process, as the last run of a backend here left
+#: it (``None``: no run yet): a run whose ``threads`` option differs from the scheduler's fails, so
+#: a backend on other threads than the last one's restarts it first.
+_SCHEDULER: dict[str, int | None] = {"threads": None}
+
+
 class HighsBackend:
     """A ``highspy.Highs`` object behind the :class:`Backend` protocol.
 
@@ -255,7 +268,8 @@ class HighsBackend:
         self._hs = highspy
         self.h = highspy.Highs()
         self.h.setOptionValue("output_flag", options.verbose)
-        self.h.setOptionValue("threads", 1)  # the LPs are small; the other core is not ours
+        self.threads = 1  # (:meth:`use_threads`)
+        self.h.setOptionValue("threads", 1)
         self.stalls = 0  # runs stopped by the iteration limit and restarted
         self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
         self.cold_starts = 0  # LPs solved from no basis by request (:meth:`start_cold`)
@@ -292,6 +306,12 @@ class HighsBackend:
         self.h.changeColsBounds(len(cols), np.asarray(cols, dtype=np.int32),
                                 np.asarray(lower, float), np.asarray(upper, float))
 
+    def use_threads(self, threads: int) -> None:
+        """From 2 threads, the LPs by HiGHS's parallel dual simplex (PAMI) on that many."""
+        self.threads = threads
+        self.h.setOptionValue("threads", threads)
+        self.h.setOptionValue("simplex_strategy", PAMI if threads > 1 else 0)
+
     def basis(self) -> Any:
         """The current ``HighsBasis``."""
         return self.h.getBasis()
@@ -312,6 +332,9 @@ class HighsBackend:
         self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
 
     def _run(self, iteration_limit: int) -> Any:
+        if _SCHEDULER["threads"] != self.threads:  # HiGHS's threads are one pool per process
+            self._hs.Highs.resetGlobalScheduler(True)
+            _SCHEDULER["threads"] = self.threads
         self.h.setOptionValue("simplex_iteration_limit", int(iteration_limit))
         self.h.run()
         return self.h.getModelStatus()
@@ -409,6 +432,10 @@ class GurobiBackend:
         self.m.Params.Threads = 1
         self.vars: list[Any] = []
         self.rows: list[Any] = []
+
+    def use_threads(self, threads: int) -> None:
+        """Gurobi's ``Threads``."""
+        self.m.Params.Threads = threads
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
         """Append [0, 1] columns."""

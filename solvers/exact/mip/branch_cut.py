@@ -67,7 +67,7 @@ ROOT_PURGE_AGE, NODE_PURGE_AGE = 3, 10
 #: 0.373 -> 0.299 %), where on GTSPLIB up to 442 nodes the root loop took more rounds and most
 #: proofs took longer (45ts225 37 -> 46 s). UAV K = 50 has 730-910 nodes. A root of at least
 #: ``columns.ROOT_DROP_NODES`` also drops edge columns priced out for long
-#: (:func:`columns.drop_root_stale`).
+#: (:func:`columns.drop_root_stale`). A big model's LPs run on ``MipOptions.lp_threads()``.
 BIG_ROOT_NODES, BIG_ROOT_PURGE_AGE = 1200, 1
 
 
@@ -157,6 +157,10 @@ class _Search:
         self.progress = progress
         self.model = model = build_model(problem, kept)
         stats["nodes"], stats["edges"] = model.n_nodes, len(model.tail)
+        threads = options.lp_threads() if model.n_nodes >= BIG_ROOT_NODES else 1
+        if threads > 1:  # its LPs take thousands of simplex iterations: worth a second core
+            backend.use_threads(threads)
+        stats["lp_threads"] = threads
         self.tour, self.ub = tour, problem.tour_cost(tour)
         self.lb = degree_bound(problem)  # a bound even if no LP is solved in time
         self.gap = max(options.abs_gap, 1 - 1e-6) if model.integral_costs else options.abs_gap

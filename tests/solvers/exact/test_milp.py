@@ -121,6 +121,29 @@ def test_a_big_root_drops_priced_out_columns_and_still_proves(monkeypatch, tmp_p
     assert checked.proven and checked.value == pytest.approx(r.objective, rel=1e-12)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_a_big_models_lps_on_two_threads_prove_the_optimum(monkeypatch, tmp_path, seed):
+    """LP threads forced on a K = 8 model (``BIG_ROOT_NODES`` 0, threads 2: HiGHS's parallel dual
+    simplex): the dp optimum is proven and the certificate checks; a small model then solves on
+    one thread in the same process (HiGHS's scheduler started again) to the same optimum."""
+    from gtsp_bench.proof import check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    inst = generate_instance(8, 5, seed=seed)
+    best = run_solver("dp", inst, 0.5).objective
+    monkeypatch.setattr(branch_cut, "BIG_ROOT_NODES", 0)
+    cert = tmp_path / "c.cert.json.gz"
+    r = run_solver(Milp(root_rounds=4, lns_trials=0, threads=2, certificate=str(cert)), inst, 0.5)
+    assert r.stats["lp_threads"] == 2
+    assert r.status == "optimal" and r.objective == pytest.approx(best, rel=1e-9)
+    checked = check_certificate(inst, read_certificate(cert))
+    assert checked.proven and checked.value == pytest.approx(r.objective, rel=1e-12)
+    monkeypatch.setattr(branch_cut, "BIG_ROOT_NODES", 10**9)
+    r = run_solver(Milp(root_rounds=4, lns_trials=0, threads=2), inst, 0.5)
+    assert r.stats["lp_threads"] == 1
+    assert r.status == "optimal" and r.objective == pytest.approx(best, rel=1e-9)
+
+
 def test_a_small_root_keeps_its_columns():
     """Below ROOT_DROP_NODES the root drops no column (GTSPLIB to 1,084 nodes, UAV K <= 100)."""
     r = run_solver(Milp(root_rounds=4, lns_trials=0), generate_instance(8, 5, seed=0), 0.5)
@@ -203,8 +226,10 @@ def test_bad_options_and_input_are_refused():
     """Options are checked when the solver is built; an asymmetric matrix is refused."""
     with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):
         get_solver("milp", lns_trials=-2)
-    with pytest.raises(InputError, match="no option 'threads'"):
-        get_solver("milp", threads=2)
+    with pytest.raises(InputError, match="no option 'workers'"):
+        get_solver("milp", workers=2)
+    with pytest.raises(InputError, match="threads must be an integer >= 1"):
+        get_solver("milp", threads=0)
     w = np.array([[0, 1, 2, 3], [5, 0, 1, 2], [2, 1, 0, 1], [3, 2, 1, 0]], dtype=float)
     inst = Instance(name="asym", clusters=tuple(np.zeros((1, 2)) for _ in range(4)), params=None,
                     edge_weight_type="EXPLICIT", weights=w, symmetric=False)

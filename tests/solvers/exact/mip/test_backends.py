@@ -59,6 +59,20 @@ def test_purge_keeps_the_backend_rows_in_step_with_the_cuts():
                                rtol=1e-9)
 
 
+def test_highs_backends_on_other_threads_share_a_process():
+    """HiGHS keeps one task scheduler per process and fails a run whose thread count differs from
+    it: backends on 2 threads (parallel dual simplex), then 1, then 2 again, each solve the same
+    LP to the same optimum."""
+    objectives = []
+    for threads in (2, 1, 2):
+        lp, _ = _lp(HighsBackend)
+        lp.backend.use_threads(threads)
+        res = lp.backend.solve_lp(60.0)
+        assert res.status == "optimal"
+        objectives.append(res.objective)
+    assert objectives == pytest.approx([objectives[0]] * 3, rel=1e-9)
+
+
 def test_highs_and_gurobi_agree_on_the_lp():
     """The same model and cuts in both backends: the same LP optimum."""
     pytest.importorskip("gurobipy")

@@ -6,12 +6,18 @@ import time
 
 import numpy as np
 import pytest
-from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.options import (
+    LP_THREADS,
+    MipOptions,
+    restart_tours,
+    upper_bound_tour,
+)
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import price
 from gtsp_bench.registry import run_solver
+from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
 
 
 @pytest.mark.parametrize("bad, message", [
@@ -21,11 +27,23 @@ from gtsp_bench.registry import run_solver
     ({"core_edges": True}, "core_edges must be an integer >= 0"),
     ({"abs_gap": float("nan")}, "abs_gap must be a number"),
     ({"abs_gap": -1.0}, "abs_gap must be a number"),
+    ({"threads": 0}, "threads must be an integer >= 1"),
+    ({"threads": 2.0}, "threads must be an integer >= 1"),
 ])
 def test_options_are_validated(bad, message):
     """Bad option values raise InputError naming the option."""
     with pytest.raises(InputError, match=message):
         MipOptions(**bad)
+
+
+def test_lp_threads_are_the_option_else_what_the_environment_allows(monkeypatch):
+    """``threads`` wins; unset, LP_THREADS at most, and at most what a benchmark's worker is
+    allowed (``GTSP_BENCH_SOLVE_THREADS``)."""
+    assert MipOptions(threads=3).lp_threads() == 3
+    monkeypatch.setenv(SOLVE_THREADS_VAR, "1")
+    assert MipOptions().lp_threads() == 1
+    monkeypatch.setenv(SOLVE_THREADS_VAR, "8")
+    assert MipOptions().lp_threads() == min(LP_THREADS, usable_cores())
 
 
 @pytest.mark.parametrize("trials", [0, 1])
