@@ -246,8 +246,8 @@ class LpModel:
 
 
 # ---------------------------------------------------------------------- HiGHS
-#: HiGHS's ``simplex_strategy`` of its parallel dual simplex.
-PAMI = 2
+#: HiGHS's ``simplex_strategy`` values: its serial dual simplex (the default), its parallel one.
+SERIAL_DUAL, PAMI = 1, 2
 #: The threads of HiGHS's task scheduler, one per process, as the last run of a backend here left
 #: it (``None``: no run yet): a run whose ``threads`` option differs from the scheduler's fails, so
 #: a backend on other threads than the last one's restarts it first.
@@ -268,8 +268,7 @@ class HighsBackend:
         self._hs = highspy
         self.h = highspy.Highs()
         self.h.setOptionValue("output_flag", options.verbose)
-        self.threads = 1  # (:meth:`use_threads`)
-        self.h.setOptionValue("threads", 1)
+        self.use_threads(1)
         self.stalls = 0  # runs stopped by the iteration limit and restarted
         self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
         self.cold_starts = 0  # LPs solved from no basis by request (:meth:`start_cold`)
@@ -307,10 +306,11 @@ class HighsBackend:
                                 np.asarray(lower, float), np.asarray(upper, float))
 
     def use_threads(self, threads: int) -> None:
-        """From 2 threads, the LPs by HiGHS's parallel dual simplex (PAMI) on that many."""
+        """From 2 threads, the LPs by HiGHS's parallel dual simplex (PAMI) on that many; on 1,
+        its serial dual simplex."""
         self.threads = threads
         self.h.setOptionValue("threads", threads)
-        self.h.setOptionValue("simplex_strategy", PAMI if threads > 1 else 0)
+        self.h.setOptionValue("simplex_strategy", PAMI if threads > 1 else SERIAL_DUAL)
 
     def basis(self) -> Any:
         """The current ``HighsBasis``."""
