@@ -16,6 +16,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.sparse as sp
+from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.model import TOL, GtspModel
 from gtsp_bench.solvers.exact.mip.options import MipOptions
 from gtsp_bench.solvers.exact.mip.separation import Cuts
@@ -240,8 +241,8 @@ class LpModel:
         on_edge, on_y = self.cuts.dual_weights(model, mu, es)
         out = np.empty(len(cols))
         out[is_y] = model.cost[ys] - pi_cluster[model.cluster[ys]] + 2 * pi_deg[ys] - on_y[ys]
-        out[~is_y] = (model.cost[n + es] - pi_deg[model.tail[es]] - pi_deg[model.head[es]]
-                      - on_edge)
+        out[~is_y] = flow.edge_reduced_costs(es, model.cost[n:], model.tail, model.head, pi_deg,
+                                             on_edge)
         return out
 
 

@@ -21,9 +21,6 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 #: Capacities are scaled to integers for scipy's max-flow.
 _FLOW_SCALE = 1_000_000
-#: Dense entries (8 bytes each, and a few temporaries of that size) built at once by
-#: :meth:`Cuts.sparse`.
-BLOCK_ENTRIES = 4_000_000
 #: Up to this many nodes :meth:`Cuts.dual_weights` takes the dense node x node product (8 ms a
 #: call at 89pcb442, 432 nodes, one BLAS thread; the split form 5.5 ms): its sums in their own
 #: order keep the searches of GTSPLIB to 442 nodes and UAV K = 20 as they were (in the split
@@ -115,9 +112,7 @@ class Cuts:
         the y entries it adds)."""
         n = model.n_nodes
         es = cols[cols >= n] - n
-        st, sh = self.side[:, model.tail[es]], self.side[:, model.head[es]]
-        inside = (st & sh).sum(axis=1)
-        crossing = (st ^ sh).sum(axis=1)
+        inside, crossing = flow.side_edges(self.side, model.tail[es], model.head[es])
         y_now = self.ycoef[self.row] != 0
         y_after = (self.ycoef[self.row] + self.side) != 0
         extra = y_after.sum(axis=1) - y_now.sum(axis=1)
@@ -148,14 +143,13 @@ class Cuts:
         out[:, ~is_y] = self._per_row(self._edge_coef(every, model.tail[es], model.head[es]))
         return out
 
-    def sparse(self, model: GtspModel, cols: np.ndarray, block: int = BLOCK_ENTRIES) -> sp.csc_array:
-        """:meth:`matrix` as a sparse array, built ``block`` dense entries at a time (all the
-        columns of 217vm1084, 587,000, at once took more than 24 GiB)."""
-        step = max(1, block // max(1, len(self.row)))
-        parts = [sp.csc_array(self.matrix(model, cols[i:i + step])) for i in range(0, len(cols), step)]
-        if len(parts) < 2:  # the usual case: one block (or no columns)
-            return parts[0] if parts else sp.csc_array((len(self), 0))
-        return sp.hstack(parts, format="csc")
+    def sparse(self, model: GtspModel, cols: np.ndarray) -> sp.csr_array:
+        """:meth:`matrix` as a sparse array (its entries found by :func:`flow.cut_rows`, never a
+        dense ``(R, len(cols))`` array: all the columns of 217vm1084, 587,000, took more than 24
+        GiB that way)."""
+        indptr, indices, data = flow.cut_rows(self.side, self.row, self.cross, self.ycoef,
+                                              np.asarray(cols, dtype=np.int64), model.tail, model.head)
+        return sp.csr_array((data, indices, indptr), shape=(len(self), len(cols)))
 
     def slack(self, model: GtspModel, values: np.ndarray) -> np.ndarray:
         """``rhs - lhs`` at a full column vector (negative: violated)."""
@@ -197,7 +191,9 @@ class Cuts:
         sides, cl = self.side[nz], model.cluster
         starts = np.flatnonzero(np.r_[True, cl[1:] != cl[:-1]])
         whole = np.logical_and.reduceat(sides, starts, axis=1)  # (sides, clusters)
-        part = sp.csr_array(sides & ~whole[:, cl])  # (sides, nodes)
+        indptr, indices = flow.loose_nodes(sides, whole, cl)
+        part = sp.csr_array((np.ones(len(indices), dtype=bool), indices, indptr),
+                            shape=sides.shape)  # (sides, nodes): nodes outside whole clusters
         wd = whole * d[:, None]
         pair = wd.T @ whole.astype(float)  # W W
         node_cluster = np.ascontiguousarray(part.T @ wd) if part.nnz else np.zeros((len(cl), len(starts)))

@@ -278,18 +278,20 @@ def test_no_max_flow_or_handle_after_the_deadline():
     assert found == {"flow_cuts", "blossom_cuts"}
 
 
-def test_the_sparse_matrix_built_in_blocks_equals_the_dense_one():
-    """:meth:`Cuts.sparse` with blocks of a few entries (many column blocks, one column each at
-    the smallest) gives the dense matrix exactly, over all columns and over a shuffled subset."""
+def test_the_sparse_matrix_equals_the_dense_one():
+    """:meth:`Cuts.sparse` gives the dense matrix exactly (sides inside and crossing, a row of
+    several sides), over all columns and over a shuffled subset, and only its nonzero entries."""
     model = _model(6, k=6)
     rng = np.random.default_rng(5)
     n = model.n_nodes
     cuts = Cuts.stack([Cuts.one(rng.random(n) < 0.5, -rng.random(n), 1.0),
                        Cuts.one(rng.random((4, n)) < 0.5, np.zeros(n), 2.0)])
-    for cols in (np.arange(model.n_cols), rng.permutation(model.n_cols)[: model.n_cols // 3]):
-        dense = cuts.matrix(model, cols)
-        for block in (1, 7, 50, 10**9):
-            sparse = cuts.sparse(model, cols, block=block)
+    crossed = Cuts(cuts.side, cuts.row, cuts.ycoef, cuts.rhs, np.array([True, False, True, True, False]))
+    for block in (cuts, crossed):
+        for cols in (np.arange(model.n_cols), rng.permutation(model.n_cols)[: model.n_cols // 3]):
+            dense = block.matrix(model, cols)
+            sparse = block.sparse(model, cols)
             assert sparse.shape == dense.shape
+            assert sparse.nnz == np.count_nonzero(dense) and sparse.has_canonical_format
             np.testing.assert_array_equal(sparse.toarray(), dense)
     assert cuts.sparse(model, np.zeros(0, dtype=np.int64)).shape == (2, 0)
