@@ -195,7 +195,7 @@ class LpModel:
     def add_cuts(self, cuts: Cuts) -> None:
         """Add cut rows over the columns present (each side in its sparser form over them)."""
         cuts = cuts.sparsest(self.model, self.cols)
-        matrix = sp.csr_array(cuts.sparse(self.model, self.cols))
+        matrix = cuts.sparse(self.model, self.cols)
         self.backend.add_rows(matrix, np.full(len(cuts), -np.inf), cuts.rhs)
         self.cuts = Cuts.stack([self.cuts, cuts])
         self.cut_ids = np.concatenate([self.cut_ids, self._next_id + np.arange(len(cuts))])

@@ -329,7 +329,7 @@ class _Search:
             if cuts is None:  # a tour: the backend's new incumbent
                 self.progress(self.problem.tour_cost(model.tour(lp.full(v))))
                 return None
-            return sp.csr_array(cuts.sparse(model, lp.cols)), cuts.rhs
+            return cuts.sparse(model, lp.cols), cuts.rhs
 
         backend = lp.backend
         assert isinstance(backend, LazyMipBackend)
