@@ -61,11 +61,11 @@ train-local: $(STAMP)
 	$(BIN)/python -m gtsp_bench.solvers.learned.imitation --recipe local \
 		-o solvers/learned/checkpoints/local.pt $(TRAIN_ARGS)
 
-# The wider policy on a GPU (the shipped checkpoints/local-l3.pt: an H200 with 16 cores, labels
-# 3-4 minutes in 7-15 processes, then 165 s of training).
+# The widest policy on a GPU (the shipped checkpoints/local-l4.pt: an H200 with 16 cores; labels
+# about 16 minutes on 2 CPU cores, or 3-4 on 15 processes; then 400 s of training).
 train-local-gpu: $(STAMP)
-	$(BIN)/python -m gtsp_bench.solvers.learned.imitation --recipe local-gpu-l3 --seed 2 \
-		--device cuda --workers 7 -o solvers/learned/checkpoints/local-l3.pt $(TRAIN_ARGS)
+	$(BIN)/python -m gtsp_bench.solvers.learned.imitation --recipe local-gpu-l4 --seed 2 \
+		--device cuda --workers 15 -o solvers/learned/checkpoints/local-l4.pt $(TRAIN_ARGS)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build site *.egg-info

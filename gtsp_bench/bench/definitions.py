@@ -215,8 +215,11 @@ class Benchmark:
 
 _HEURISTICS = ("greedy", "greedy+ls", "aco", "aco+ls", "lns", "pyvrp")
 _PEERS_TABLE = (*_HEURISTICS, "ortools", "lkh")
-#: The wider local-view policy trained on a GPU (recipe ``local-gpu-l3``), a shipped file.
+#: The wider local-view policies trained on a GPU (recipes ``local-gpu-l3``, ``local-gpu-l4``,
+#: ``local-gpu-l4-tiled``), shipped files.
 _L3 = "solvers/learned/checkpoints/local-l3.pt"
+_L4 = "solvers/learned/checkpoints/local-l4.pt"
+_L4_TILED = "solvers/learned/checkpoints/local-l4-tiled.pt"
 #: GTSPLIB's planar (EUC_2D) files of GLNS's 45: the transfer benchmark's distance-only problems.
 _GLNS45_PLANAR = (
     "31pr152", "32u159", "39rat195", "40d198", "40kroa200", "40krob200", "45ts225", "45tsp225",
@@ -252,6 +255,8 @@ _LEARNED = (
     run("local", "local heads=paper", max_k=10, heads="paper"),
     run("local", "local starts=8", max_k=10, starts=8),
     run("local", "local policy=l3", checkpoint=_L3),
+    run("local", "local policy=l4", checkpoint=_L4),
+    run("local", "local policy=l4-tiled", checkpoint=_L4_TILED),
     run("local-search"),
 )
 _LARGE_UAV = tuple(f"uav-K{k}-N20-s1" for k in (20, 50, 100, 200))
@@ -359,6 +364,8 @@ BENCHMARKS: dict[str, Benchmark] = {
             "one greedy decode against lns to convergence or GTSPLIB's best known",
             (Committed(_TRANSFER_SETS), Gtsplib(names=_GLNS45_PLANAR)),
             (run("local"), run("local", "local policy=l3", checkpoint=_L3),
+             run("local", "local policy=l4", checkpoint=_L4),
+             run("local", "local policy=l4-tiled", checkpoint=_L4_TILED),
              run("lns", "lns (reference)", max_k=100, stop_at_convergence=True)),
             omegas=(0.3, 0.6),
             budget=Budget(None),

@@ -3,21 +3,23 @@
 REINFORCE needs many sampled tours per useful gradient; a CPU budget of under an hour is far
 better spent imitating good tours (as LEHD and BQ-NCO train). A run:
 
-1. **Labels**: for each ``(K, count, area)`` of the recipe's mix, instances
+1. **Labels** (:mod:`~.labels`): for each ``(K, count, area)`` of the recipe's mix, instances
    ``instance_set(count, K, label_seed, area=area)`` (a seed no test set uses), omega of instance
    i drawn from ``[label_seed, K, i]`` uniform in ``[0, omega_max]``; for a
    ``(K, count, area, "tiled")`` entry, :func:`~.tiled.tiled_set` instances (clusters that tile
    the plane, as GTSPLIB's) at omega 0. Each is solved by ``lns`` with ``stop_at_convergence``.
-   Labels are cached (``CKPT.labels.npz``; reused when the mix matches, so a second run skips
-   them).
+   Labels and the validation sets' reference values are cached (``CKPT.labels.npz``; reused
+   when the mix matches, so a second run skips them).
 2. **States**: every label tour is walked from the depot, forwards and backwards (both
    directions cost the same with optimal heads), through the same :class:`~.local.Walk` that
    decoding uses; each step's view and the position of the tour's next cluster in it is one
    sample (steps whose next cluster is outside the view, or with one candidate left, are left out).
 3. **Training**: cross-entropy on the next cluster, each sample's vectors turned by a random
    rotation and mirror (the problem's symmetry), Adam with a cosine learning rate over the time
-   budget. Validation: greedy decoding (one start, optimal heads) on a fixed K = 50 set against
-   ``lns``; the policy with the best validation gap is kept.
+   budget, optionally an exponential average of the weights (``ema``). Validation: greedy
+   decoding (one start, optimal heads) on fixed sets (K = 50, or K = 20-200 for the ``l4``
+   recipes) against ``lns``, of the averaged weights where there are; the policy with the best
+   validation gap (the mean over the sets) is kept.
 
 Files, beside ``-o CKPT``: ``CKPT`` (the policy), ``CKPT.json`` (command, mix, times, scores,
 config), ``CKPT.imitation.csv`` (``step,loss,accuracy,lr,val_gap_pct,wall_s``; not named
@@ -37,7 +39,6 @@ import dataclasses
 import io
 import json
 import math
-import multiprocessing
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -49,26 +50,23 @@ import numpy as np
 import torch
 from gtsp_bench.solvers.learned.checkpoint import save_policy
 from gtsp_bench.solvers.learned.env import EnvBatch, env_from_instances, optimal_heads_batch
+from gtsp_bench.solvers.learned.labels import (
+    VAL_SEED,
+    Entry,
+    fork_pool,
+    label_set,
+    load_or_solve_labels,
+    parse_entry,
+    validation_set,
+)
 from gtsp_bench.solvers.learned.local import LocalPolicy, Walk, _flight_per_m, turn
-from gtsp_bench.solvers.learned.tiled import tiled_set
 from torch import nn
 
 from gtsp_bench.checks import arg_float, arg_seed, check_choice, check_float, check_int, check_seed
-from gtsp_bench.data.io import atomic_write_bytes, atomic_write_text
+from gtsp_bench.data.io import atomic_write_text
 from gtsp_bench.errors import InputError, OneLineParser
-from gtsp_bench.generator import instance_set
 
-#: Seeds of the validation set (never used for training or testing).
-VAL_SEED = 818_273
 LOG_COLUMNS = ("step", "loss", "accuracy", "lr", "val_gap_pct", "wall_s")
-#: A label set: ``(K, instances, area)`` (the UAV generator's squares) or ``(K, instances, area,
-#: "tiled")`` (:mod:`~.tiled`; its area is ignored).
-Entry = tuple[int, int, float] | tuple[int, int, float, str]
-
-
-def _entry(e: Entry) -> tuple[int, int, float, bool]:
-    """K, instances, area and whether tiled, of a label-set entry."""
-    return int(e[0]), int(e[1]), float(e[2]), len(e) > 3 and e[3] == "tiled"  # type: ignore[misc]
 
 
 @dataclass(frozen=True)
@@ -93,9 +91,13 @@ class ImitationConfig:
     batch, lr, max_time, steps, seed, threads
         Samples per step, peak learning rate, training wall budget (s), step cap, seed, torch
         threads.
+    ema
+        Decay of an exponential moving average of the weights (0: none). With it, validation
+        and the policy file use the averaged weights (torch's ``AveragedModel``).
     val
         ``(K, instances, area)`` of the validation set (omega 0.3 and 0.6 in turn), or a tiled
-        entry (omega 0).
+        entry (omega 0); or a tuple of such entries, whose mean gaps are averaged (each K
+        counts the same). Stored as a tuple of entries.
     val_every, log_every
         Steps between validations and between log rows.
     """
@@ -112,17 +114,22 @@ class ImitationConfig:
     steps: int = 1_000_000
     seed: int = 0
     threads: int = 1
-    val: Entry = (50, 24, 1500.0)
+    ema: float = 0.0
+    val: Entry | tuple[Entry, ...] = (50, 24, 1500.0)
     val_every: int = 500
     log_every: int = 100
 
     def __post_init__(self) -> None:
         if not self.mix:
             raise InputError("the label mix is empty")
-        for e in (*self.mix, self.val):
+        if not self.val:
+            raise InputError("the validation set is empty")
+        if not isinstance(self.val[0], (tuple, list)):  # one entry
+            object.__setattr__(self, "val", (tuple(self.val),))
+        for e in (*self.mix, *self.val):
             if len(e) not in (3, 4) or (len(e) == 4 and e[3] != "tiled"):
                 raise InputError(f"a label set is (K, instances, area[, 'tiled']), got {e!r}")
-            k, n, area, _ = _entry(e)
+            k, n, area, _ = parse_entry(e)
             check_int("K", k, 2)
             check_int("instances", n, 1)
             check_float("area", area, 0.0, math.inf)
@@ -131,6 +138,8 @@ class ImitationConfig:
             check_int(name, getattr(self, name), 1)
         check_float("learning rate", self.lr, 0.0, math.inf)
         check_float("max time", self.max_time, 0.0, math.inf)
+        if check_float("ema", self.ema, 0.0, 1.0, open_low=False) == 1.0:
+            raise InputError("ema must be below 1 (0: no averaging)")
         check_seed(self.seed)
         check_seed(self.label_seed)
         if self.label_seed in (1, 5_000, 6_000):
@@ -146,6 +155,11 @@ class ImitationConfig:
 
 _GPU_MIX = ((10, 1000, 1000.0), (20, 2500, 1000.0), (30, 1500, 1200.0), (50, 2000, 1500.0),
             (100, 400, 2000.0))
+_TILED_MIX = ((20, 2000, 1000.0, "tiled"), (40, 1500, 1000.0, "tiled"),
+              (80, 600, 1000.0, "tiled"), (120, 150, 1000.0, "tiled"))
+#: Validation from K = 20 to 200 (the policy kept is the best over all four sets).
+_VAL_K = ((20, 24, 1000.0), (50, 24, 1500.0), (100, 16, 2000.0), (200, 8, 3000.0))
+_L4 = {"dim": 128, "n_layers": 4, "ff": 256}
 
 #: The named recipes. ``local``: the shipped ``checkpoints/local.pt``; ``local-small``: a short
 #: run on fewer labels (the fallback, and a quick check that training works).
@@ -170,11 +184,23 @@ RECIPES: dict[str, ImitationConfig] = {
         model_options={"dim": 96, "n_layers": 3, "ff": 192},
         batch=1024, lr=1e-3, max_time=165.0, val_every=2000, log_every=200,
     ),
+    # wider and deeper again, its weights averaged (ema), validated from K = 20 to 200
+    "local-gpu-l4": ImitationConfig(
+        recipe="local-gpu-l4",
+        mix=_GPU_MIX, model_options=_L4, ema=0.999, val=_VAL_K,
+        batch=1024, lr=1e-3, max_time=400.0, val_every=2000, log_every=200,
+    ),
+    # the same on the UAV mix and the tiled one together (for GTSPLIB's planar files too)
+    "local-gpu-l4-tiled": ImitationConfig(
+        recipe="local-gpu-l4-tiled",
+        mix=_GPU_MIX + _TILED_MIX, model_options=_L4, ema=0.999,
+        val=(*_VAL_K, (60, 24, 1000.0, "tiled")),
+        batch=1024, lr=1e-3, max_time=400.0, val_every=2000, log_every=200,
+    ),
     # distance-only problems (GTSPLIB's planar files): clusters that tile the plane, omega 0
     "local-tiled": ImitationConfig(
         recipe="local-tiled",
-        mix=((20, 2000, 1000.0, "tiled"), (40, 1500, 1000.0, "tiled"),
-             (80, 600, 1000.0, "tiled"), (120, 150, 1000.0, "tiled")),
+        mix=_TILED_MIX,
         val=(60, 24, 1000.0, "tiled"),
         max_time=1200.0,
     ),
@@ -190,100 +216,6 @@ def get_recipe(name: str, **overrides: Any) -> ImitationConfig:
     """The recipe ``name`` with fields changed (checked again)."""
     base = RECIPES[check_choice("recipe", name, tuple(RECIPES))]
     return dataclasses.replace(base, **overrides)
-
-
-# ---------------------------------------------------------------------- labels
-def _pool(workers: int, warm: bool = False) -> Any:
-    """A ``fork`` pool of ``workers`` processes (``None`` for one: work in this process). With
-    ``warm``, lns's kernels are compiled here first (once), so that the workers inherit them."""
-    if workers <= 1:
-        return None
-    global _WARM
-    if warm and not _WARM:
-        from gtsp_bench.registry import get_solver
-
-        inst = instance_set(1, 5, 1, 20)[0]
-        get_solver("lns", stop_at_convergence=True).solve(inst, 0.5, time_limit=10.0, seed=0)
-        _WARM = True
-    return multiprocessing.get_context("fork").Pool(workers)
-
-
-_WARM = False
-
-
-
-def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max: float,
-              tiled: bool = False) -> tuple[list[Any], np.ndarray]:
-    """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``; 0 for
-    a tiled set)."""
-    if tiled:
-        return tiled_set(count, k, seed), np.zeros(count)
-    insts = instance_set(count, k, seed, nodes, area=area)
-    omegas = np.array([np.random.default_rng([seed, k, i, 7]).uniform(0.0, omega_max)
-                       for i in range(count)])
-    return insts, omegas
-
-
-#: The instances and omegas being labelled (set before a pool forks: instances don't pickle).
-_JOBS: tuple[Sequence[Any], Sequence[float]] = ((), ())
-
-
-def _solve_one(i: int) -> tuple[tuple[int, ...], float]:
-    """Label ``i`` of :data:`_JOBS`: ``lns`` (stop at convergence, seed ``i``)."""
-    from gtsp_bench.energy import evaluate
-    from gtsp_bench.registry import get_solver
-
-    inst, w = _JOBS[0][i], float(_JOBS[1][i])
-    sol = get_solver("lns", stop_at_convergence=True).solve(inst, w, time_limit=120.0, seed=i)
-    return sol.order, evaluate(inst, w, sol.order, sol.heads).objective
-
-
-def solve_labels(insts: Sequence[Any], omegas: Sequence[float], say: Any = None,
-                 workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """Orders ``(n, K)`` and objectives ``(n,)`` of ``lns`` (stop at convergence) on each, in
-    ``workers`` forked processes when more than one: the same labels either way."""
-    global _JOBS
-    _JOBS = (insts, omegas)
-    pool = _pool(workers, warm=True)
-    run = pool.imap(_solve_one, range(len(insts)), chunksize=2) if pool else map(
-        _solve_one, range(len(insts)))
-    orders, values = [], []
-    for i, (order, value) in enumerate(run):
-        orders.append(order)
-        values.append(value)
-        if say is not None and (i + 1) % 100 == 0:
-            say(f"labels K={insts[i].n_clusters}: {i + 1}/{len(insts)}")
-    if pool is not None:
-        pool.close()
-        pool.join()
-    _JOBS = ((), ())
-    return np.array(orders, dtype=np.int64), np.array(values)
-
-
-def load_or_solve_labels(cfg: ImitationConfig, cache: Path | None, say: Any = None,
-                         workers: int = 1) -> tuple[dict[Entry, np.ndarray], float]:
-    """Label orders per mix entry, from ``cache`` when it holds that entry; returns them and the
-    seconds spent solving new ones (new ones are added to the cache)."""
-    stored: dict[str, np.ndarray] = {}
-    if cache is not None and cache.is_file():
-        with np.load(cache) as f:
-            stored = {key: f[key] for key in f.files}
-    out, spent = {}, 0.0
-    for e in cfg.mix:
-        k, n, area, tiled = _entry(e)
-        key = (f"K{k}_n{n}_tiled_s{cfg.label_seed}" if tiled else
-               f"K{k}_n{n}_a{area:g}_s{cfg.label_seed}_w{cfg.omega_max:g}_N{cfg.nodes}")
-        if key not in stored:
-            t = time.perf_counter()
-            insts, omegas = label_set(k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max, tiled)
-            stored[key] = solve_labels(insts, omegas, say, workers)[0]
-            spent += time.perf_counter() - t
-            if cache is not None:
-                buf = io.BytesIO()
-                np.savez_compressed(buf, **stored)
-                atomic_write_bytes(cache, buf.getvalue())
-        out[e] = stored[key]
-    return out, spent
 
 
 # ---------------------------------------------------------------------- states
@@ -335,7 +267,7 @@ def _chunk_states(task: tuple[ImitationConfig, Entry, int, np.ndarray, int],
     """The states of label tours ``lo .. lo + len(orders)`` of one mix entry, both directions."""
     cfg, e, lo, orders, k = task
     torch.set_num_threads(1)
-    kk, n, area, tiled = _entry(e)
+    kk, n, area, tiled = parse_entry(e)
     insts, omegas = label_set(kk, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max, tiled)
     env = env_from_instances(insts[lo:lo + len(orders)], omegas[lo:lo + len(orders)].tolist())
     o = torch.from_numpy(orders)
@@ -351,12 +283,12 @@ def build_samples(cfg: ImitationConfig, labels: dict[Entry, np.ndarray], k: int,
     """Every state of every label tour in both directions (in ``pool`` when given, the same
     states in the same order); the in-view share per K (``K20t`` for a tiled set)."""
     tasks = [(cfg, e, lo, orders[lo:lo + 500], k)
-             for e, orders in labels.items() for lo in range(0, _entry(e)[1], 500)]
+             for e, orders in labels.items() for lo in range(0, parse_entry(e)[1], 500)]
     mapper: Callable[..., Any] = pool.map if pool is not None else lambda f, t: list(map(f, t))
     parts, coverage = [], {}
     for task, (chunk, share) in zip(tasks, mapper(_chunk_states, tasks), strict=True):
         parts.extend(chunk)
-        kk, _, _, tiled = _entry(task[1])
+        kk, _, _, tiled = parse_entry(task[1])
         coverage[f"{kk}t" if tiled else str(kk)] = share
     return Samples.join(parts), coverage
 
@@ -428,12 +360,12 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
     paths = output_paths(output)
     cache = Path(labels) if labels else paths["labels"]
     start = time.perf_counter()
-    label_orders, label_s = load_or_solve_labels(cfg, cache, say, workers)
+    label_orders, refs, label_s = load_or_solve_labels(cfg, cache, say, workers)
     if labels_only:
         say(f"labels in {cache}: {label_s:.0f} s")
         return {}
     model = LocalPolicy(**cfg.model_options)
-    pool = _pool(workers)
+    pool = fork_pool(workers)
     try:
         data, coverage = build_samples(cfg, label_orders, model.k, pool)
     finally:
@@ -441,19 +373,21 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
             pool.close()
             pool.join()
     say(f"{len(data)} states; next cluster in view: {coverage}")
-    vk, vn, varea, vtiled = _entry(cfg.val)
-    vinsts = label_set(vk, vn, varea, VAL_SEED, cfg.nodes, 0.0, vtiled)[0]
-    vomegas = [0.0 if vtiled else 0.3 if i % 2 == 0 else 0.6 for i in range(vn)]
-    vref = solve_labels(vinsts, vomegas)[1]
-    venv = env_from_instances(vinsts, vomegas)
-    vref_t = torch.from_numpy(vref)
-    # at omega 0 a node's cost is its cluster's hover energy: the same for every tour
-    vbase = venv.node_cost.min(-1).values.sum(-1) if vtiled else 0.0
+    vsets = []
+    for e in cfg.val:
+        vinsts, vomegas = validation_set(e, cfg.nodes)
+        venv = env_from_instances(vinsts, vomegas)
+        # at omega 0 a node's cost is its cluster's hover energy: the same for every tour
+        vbase = venv.node_cost.min(-1).values.sum(-1) if parse_entry(e)[3] else 0.0
+        vsets.append((venv, torch.from_numpy(refs[e]), vbase))
     prep_s = time.perf_counter() - start
     gen = torch.Generator().manual_seed(cfg.seed)
     model.to(dev)
     data = Samples(*(getattr(data, f.name).to(dev) for f in dataclasses.fields(Samples)))
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    averaged = (torch.optim.swa_utils.AveragedModel(
+        model, multi_avg_fn=torch.optim.swa_utils.get_ema_multi_avg_fn(cfg.ema), use_buffers=True)
+        if cfg.ema else None)
     rows: list[dict[str, Any]] = []
     best, best_step = math.inf, 0
     t0 = time.perf_counter()
@@ -465,8 +399,9 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
     def validate() -> float:
         nonlocal best, best_step
         cpu = LocalPolicy(**cfg.model_options)
-        cpu.load_state_dict({k: v.cpu() for k, v in model.state_dict().items()})
-        gap = greedy_gap(cpu, venv, vref_t, vbase)
+        weights = (averaged.module if averaged is not None else model).state_dict()
+        cpu.load_state_dict({k: v.cpu() for k, v in weights.items()})
+        gap = float(np.mean([greedy_gap(cpu, venv, ref, base) for venv, ref, base in vsets]))
         if gap < best:
             best, best_step = gap, step
             save_policy(cpu, paths["policy"])
@@ -491,6 +426,8 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
         loss.backward()
         nn.utils.clip_grad_norm_(model.parameters(), 1.0)
         opt.step()
+        if averaged is not None:
+            averaged.update_parameters(model)
         step += 1
         window.append((loss.detach(), acc))
         if step % cfg.log_every == 0:
@@ -518,7 +455,7 @@ def train(cfg: ImitationConfig, output: str | Path, *, labels: str | Path | None
 def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, best_step: int,
           label_s: float, prep_s: float, train_s: float, coverage: dict[str, float],
           n_states: int, device: str = "cpu", workers: int = 1) -> dict[str, Any]:
-    val_tiled = _entry(cfg.val)[3]
+    val_tiled = [parse_entry(e)[3] for e in cfg.val]
     return {
         "model": "local",
         "command": cfg.command(paths["policy"], device, workers),
@@ -530,9 +467,11 @@ def _meta(cfg: ImitationConfig, paths: dict[str, Path], step: int, best: float, 
         "prep_wall_s": round(prep_s, 1),
         "wall_s": round(train_s, 1),
         "val_gap_pct": best,
-        "validation": {"seed": VAL_SEED, "clusters": cfg.val[0], "instances": cfg.val[1],
-                       "area": cfg.val[2], "tiled": val_tiled,
-                       "omega": [0.0] if val_tiled else [0.3, 0.6],
+        "validation": {"seed": VAL_SEED, "sets": [list(e) for e in cfg.val],
+                       "tiled": all(val_tiled),
+                       "omega": ([0.0] if all(val_tiled) else [0.0, 0.3, 0.6] if any(val_tiled)
+                                 else [0.3, 0.6]),
+                       "gap": "mean over the sets of each set's mean gap",
                        "reference": "lns stop_at_convergence",
                        "decoding": "greedy, one start, optimal heads"},
         "states": n_states,
