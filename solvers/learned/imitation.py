@@ -124,8 +124,8 @@ class ImitationConfig:
             raise InputError("the label mix is empty")
         if not self.val:
             raise InputError("the validation set is empty")
-        if not isinstance(self.val[0], (tuple, list)):  # one entry
-            object.__setattr__(self, "val", (tuple(self.val),))
+        val = (self.val,) if not isinstance(self.val[0], (tuple, list)) else self.val  # one entry
+        object.__setattr__(self, "val", tuple(tuple(e) for e in val))
         for e in (*self.mix, *self.val):
             if len(e) not in (3, 4) or (len(e) == 4 and e[3] != "tiled"):
                 raise InputError(f"a label set is (K, instances, area[, 'tiled']), got {e!r}")

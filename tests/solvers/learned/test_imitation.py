@@ -108,6 +108,7 @@ def test_several_validation_sets_and_averaged_weights(tmp_path):
                      ema=0.5, model_options=opts)
     assert cfg.val == ((5, 2, 1000.0), (7, 2, 1000.0))
     assert get_recipe("local-small", val=(5, 2, 1000.0)).val == ((5, 2, 1000.0),)
+    assert get_recipe("local-small", val=[[5, 2, 1000.0]]).val == ((5, 2, 1000.0),)  # as in JSON
     meta = train(cfg, tmp_path / "p.pt", progress=False)
     assert meta["validation"]["sets"] == [[5, 2, 1000.0], [7, 2, 1000.0]]
     with np.load(tmp_path / "p.labels.npz") as f:
