@@ -70,7 +70,6 @@ def fork_pool(workers: int, warm: bool = False) -> Any:
 _WARM = False
 
 
-
 def label_set(k: int, count: int, area: float, seed: int, nodes: int, omega_max: float,
               tiled: bool = False) -> tuple[list[Any], np.ndarray]:
     """Instances and omegas of one label set (omega of instance i from ``[seed, K, i]``; 0 for
@@ -143,19 +142,17 @@ def load_or_solve_labels(cfg: LabelConfig, cache: Path | None, say: Any = None,
     jobs = [(e, False) for e in cfg.mix] + [(e, True) for e in cfg.val]
     for e, is_val in jobs:
         k, n, area, tiled = parse_entry(e)
-        seed = VAL_SEED if is_val else cfg.label_seed
-        key = (f"K{k}_n{n}_tiled_s{seed}" if tiled else
-               f"K{k}_n{n}_a{area:g}_s{seed}_w{cfg.omega_max:g}_N{cfg.nodes}")
-        if is_val:  # omegas 0.3 / 0.6 (or 0), not omega_max's
+        if is_val:  # seed VAL_SEED, omegas 0.3 / 0.6 (or 0), not omega_max's
             key = f"val_K{k}_n{n}_tiled" if tiled else f"val_K{k}_n{n}_a{area:g}_N{cfg.nodes}"
+        else:
+            key = (f"K{k}_n{n}_tiled_s{cfg.label_seed}" if tiled else
+                   f"K{k}_n{n}_a{area:g}_s{cfg.label_seed}_w{cfg.omega_max:g}_N{cfg.nodes}")
         if key not in stored:
             t = time.perf_counter()
-            if is_val:
-                insts, omegas = validation_set(e, cfg.nodes)
-                stored[key] = solve_labels(insts, omegas, say, workers)[1]
-            else:
-                insts, omegas = label_set(k, n, area, seed, cfg.nodes, cfg.omega_max, tiled)
-                stored[key] = solve_labels(insts, omegas, say, workers)[0]
+            insts, omegas = (validation_set(e, cfg.nodes) if is_val else label_set(
+                k, n, area, cfg.label_seed, cfg.nodes, cfg.omega_max, tiled))
+            orders, values = solve_labels(insts, omegas, say, workers)
+            stored[key] = values if is_val else orders
             spent += time.perf_counter() - t
             if cache is not None:
                 buf = io.BytesIO()
