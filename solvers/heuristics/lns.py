@@ -66,6 +66,8 @@ FIT_FLOOR = 10
 CHUNK_SECONDS = 0.01
 #: Iterations of a raced start's short trial between two looks at the clock.
 RACE_CHUNK = 200
+#: Double-bridge kicks per call of their kernel (a look at the clock after each call).
+KICK_CHUNK = 64
 
 
 @dataclass
@@ -306,6 +308,11 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
+                if s.kicks:  # double-bridge kicks of the base
+                    base_cost = self.kick(base, base_cost, s.kicks, deadline)
+                    if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
+                        run.best, run.best_cost = base.copy(), base_cost
+                        self.progress(base_cost)
                 if self.fail_passes and self.regions is not None:  # re-solve the base's regions
                     gain = self.polish(run, base, deadline, [rng], self.fail_passes,
                                        temperature=s.fail_temperature)
@@ -315,6 +322,19 @@ class _Search:
                             run.best, run.best_cost = base.copy(), base_cost
                             self.progress(base_cost)
             run.converged = run.converged or run.trials >= s.trial_count
+
+    def kick(self, tour: np.ndarray, cost: float, count: int, deadline: float | None) -> float:
+        """``count`` double-bridge kicks of ``tour`` (changed in place), each followed by the
+        local search, a kicked tour kept when it costs no more
+        (:func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`), in chunks until
+        ``deadline``; returns the tour's cost."""
+        tol = REL_TOL * max(1.0, abs(cost))
+        while count > 0 and not is_past(deadline):
+            chunk = min(count, KICK_CHUNK)
+            cost = kernels.kick_search(tour, cost, chunk, self.edge, self.node, self.start,
+                                       self.near, self.cluster_of, tol, self.symmetric)
+            count -= chunk
+        return cost
 
     def polish(self, run: _Run, tour: np.ndarray, deadline: float | None,
                rngs: list[np.random.Generator], passes: int | None = None, *,
@@ -472,6 +492,11 @@ class Lns:
         share of all, are taken out and put back by random insertion
         (:func:`~gtsp_bench.solvers.heuristics.lns_kernels.regional_tour`), then the local search
         and trials as after a cold restart (default 0, off; the notes measure 0.3).
+    kicks
+        Double-bridge kicks of the start of each trial that did not improve it, each followed by
+        the local search and kept when no dearer (>= 0; default 0, off: an iterated local search
+        between the trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; its
+        measurements on a few files were mixed, ``docs/notes/2026-11-30-lns-kicks.md``).
     """
 
     asymmetric = True
@@ -492,7 +517,7 @@ class Lns:
         path_temperature: float = 3.0,
         fail_passes: int | None = None, fail_temperature: float = 3.0,
         workers: int | None = None, exchange: float = 0.5, mirror: bool | None = None,
-        plateau: bool | None = None, regional: float | None = None,
+        plateau: bool | None = None, regional: float | None = None, kicks: int = 0,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,
@@ -501,7 +526,7 @@ class Lns:
                                     macro_iterations, macro_groups, starts, start_iterations, paths,
                                     path_clusters, path_iterations, path_temperature,
                                     fail_passes, fail_temperature, workers,
-                                    exchange, effort, mirror, plateau, regional)
+                                    exchange, effort, mirror, plateau, regional, kicks)
         kernels.warm_up()  # compiled or loaded here (a worker's start-up), not in a solve's clock
 
     def solve(

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from gtsp_bench.solvers.heuristics.lns_costs import ec, ec_key, ec_of_key
 from gtsp_bench.solvers.heuristics.lns_local import (  # noqa: F401 (re-exported for callers)
+    kick_search,
     local_search,
     move_opt,
     or_opt,
@@ -534,6 +535,8 @@ def warm_up() -> None:
                   np.array([4.0, 4, 1, 0.1, 2, 0.1, 0.1, 1, 1]), 4, costs, node, start, near, cluster_of,
                   True)
         local_search(t.copy(), costs, node, start, near, cluster_of, 1e-9, np.ones(6, dtype=np.bool_), True)
+        kick_search(t.copy(), tour_cost(t, costs, node), 1, costs, node, start, near, cluster_of, 1e-9,
+                    True)
         tour_cost(t, costs, node)
         random_insertion_tour(costs, node, start, near, cluster_of)
         regional_tour(t, 3, costs, node, start, near, cluster_of, True)

@@ -374,3 +374,39 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
         for i in range(n):
             t[i] = saved[i]
         return cost
+
+
+
+@njit(cache=True, nogil=True)
+def kick_search(t: np.ndarray, cost: float, count: int, edge: np.ndarray, node: np.ndarray,
+                start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
+                symmetric: bool) -> float:
+    """``count`` double-bridge kicks of ``t`` (in place), each followed by :func:`local_search`
+    from the clusters at its cuts; a kicked tour that costs no more than ``t`` (within ``tol``)
+    replaces it: the iterated local search of Lin-Kernighan solvers. Returns the cost of ``t``.
+
+    A kick cuts the cycle at three random places and swaps the two middle runs (``A B C D`` to
+    ``A C B D``): four edges change at once, far apart, and no run is reversed (directed costs
+    keep their direction). It reaches tours that no chain of improving 2-opt, or-opt and move
+    steps reaches. Cycles of fewer than 8 clusters are left as they are.
+    """
+    n = len(t)
+    if n < 8:
+        return cost
+    u = np.empty_like(t)
+    awake = np.zeros(n, dtype=np.bool_)
+    for _ in range(count):
+        cuts = np.sort(np.random.choice(n - 1, 3, replace=False) + 1)
+        i, j, k = cuts[0], cuts[1], cuts[2]
+        u[:i] = t[:i]
+        u[i:i + k - j] = t[j:k]
+        u[i + k - j:k] = t[i:j]
+        u[k:] = t[k:]
+        awake[:] = False
+        for p in (i - 1, i, i + k - j - 1, i + k - j, k - 1, k % n):
+            awake[cluster_of[u[p]]] = True
+        c = local_search(u, edge, node, start, near, cluster_of, tol, awake, symmetric)
+        if c <= cost + tol:
+            t[:] = u
+            cost = c
+    return cost

@@ -108,6 +108,7 @@ class LnsSettings:
     mirror: bool | None = None
     plateau: bool | None = None
     regional: float | None = None
+    kicks: int = 0
 
     def __post_init__(self) -> None:
         # the options that may be None (the effort's or the instance's default): checked if given
@@ -118,6 +119,7 @@ class LnsSettings:
             if getattr(self, name) is not None:
                 check_bool(name, getattr(self, name))
         check_float("remove_fraction", self.remove_fraction, 0.0, 1.0)
+        check_int("kicks", self.kicks, 0)
         if self.effort is not None:
             check_choice("effort", self.effort, tuple(EFFORTS))
             if self.stop_at_convergence is not None:

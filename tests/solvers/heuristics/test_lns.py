@@ -613,3 +613,29 @@ def test_regional_restarts_leave_stopping_efforts_alone():
     runs = [run_solver(get_solver("lns", effort="default", **extra), inst, 0.4, seed=1)
             for extra in ({}, {"regional": 0.0})]
     assert len({(r.order, r.heads, r.objective, r.stats["iterations"]) for r in runs}) == 1
+
+
+def test_kicks_run_after_failed_trials_only_when_asked(monkeypatch):
+    """With ``kicks`` a budget run kicks the start of each failed trial (that many kicks in all
+    per failed trial) and still ends at the DP optimum, never below; without it (the default) no
+    kick is made; a negative count is refused."""
+    inst = generate_instance(9, 3, seed=4)
+    optimum = run_solver("dp", inst, 0.5).objective
+    kick_search = kernels.kick_search
+    for count in (0, 100):
+        solver = get_solver("lns", iterations=20, kicks=count, **BUDGET)
+        calls: list[int] = []
+
+        def spy(t, cost, n, *args, calls=calls, kick_search=kick_search):
+            calls.append(n)
+            return kick_search(t, cost, n, *args)
+
+        monkeypatch.setattr(kernels, "kick_search", spy)
+        r = run_solver(solver, inst, 0.5, seed=3, time_limit=0.2)
+        monkeypatch.undo()
+        assert r.objective >= optimum - 1e-9 * optimum
+        assert r.objective == pytest.approx(optimum, rel=1e-9)
+        assert bool(calls) == bool(count)
+        assert all(n <= lns_module.KICK_CHUNK for n in calls)
+    with pytest.raises(InputError, match="kicks"):
+        get_solver("lns", kicks=-1)

@@ -194,3 +194,42 @@ def test_moves_return_their_savings(seed, directed):
     moved, cost = lns_local.move_round(t, pos, edge, node, start, near, cluster_of, 1e-9, active,
                                        not directed, True, before)
     assert moved and cost == pytest.approx(lns_local.tour_cost(t, edge, node), rel=1e-9)
+
+
+@pytest.mark.parametrize(("seed", "directed"), [(0, False), (1, False), (2, True)])
+def test_kick_search_never_worse_and_feasible(seed, directed):
+    """Double-bridge kicks keep one node per cluster, never raise the cost (directed costs priced
+    in their direction), return the tour's cost, and from random local optima find something
+    cheaper at least once; a cycle under 8 clusters is left as it is."""
+    k = 30
+    if directed:
+        edge, node, start, cluster_of = _asymmetric_problem(k, seed)
+        near = kernels.neighbours(edge, start, k - 1)
+
+        def cost_of(t):
+            return _directed_cost(t, edge) + float(node[t].sum())
+    else:
+        p, start, cluster_of = _problem(k, 5, seed)
+        edge, node = p.edge_cost, p.node_cost
+        near = kernels.neighbours(edge, start, 5)
+        cost_of = p.tour_cost
+    n = len(start) - 1  # clusters (with the depot's on the UAV instance)
+    kernels.seed(seed)
+    rng = np.random.default_rng(seed)
+    gained = False
+    for _ in range(6):
+        t = np.array([rng.integers(start[c], start[c + 1]) for c in rng.permutation(n)], dtype=np.int64)
+        awake = np.ones(n, dtype=bool)
+        before = lns_local.local_search(t, edge, node, start, near, cluster_of, 1e-9, awake, not directed)
+        cost = lns_local.kick_search(t, before, 200, edge, node, start, near, cluster_of, 1e-9,
+                                     not directed)
+        assert sorted(cluster_of[t]) == list(range(n))
+        assert cost == pytest.approx(cost_of(t), rel=1e-12)
+        assert cost <= before + 1e-9
+        gained = gained or cost < before - 1e-9
+    assert gained
+    small = np.array([start[c] for c in range(6)], dtype=np.int64)
+    kept = small.copy()
+    assert lns_local.kick_search(small, 1.0, 50, edge, node, start, near, cluster_of, 1e-9,
+                                 not directed) == 1.0
+    assert np.array_equal(small, kept)
