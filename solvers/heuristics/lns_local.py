@@ -376,7 +376,6 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
         return cost
 
 
-
 @njit(cache=True, nogil=True)
 def kick_search(t: np.ndarray, cost: float, count: int, edge: np.ndarray, node: np.ndarray,
                 start: np.ndarray, near: np.ndarray, cluster_of: np.ndarray, tol: float,
