@@ -495,8 +495,9 @@ class Lns:
     kicks
         Double-bridge kicks of the start of each trial that did not improve it, each followed by
         the local search and kept when no dearer (>= 0; default 0, off: an iterated local search
-        between the trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; its
-        measurements on a few files were mixed, ``docs/notes/2026-11-30-lns-kicks.md``).
+        between the trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; lower
+        gaps at 60 s on most runs of six files of 235-464 clusters, mixed at GLNS's short budgets:
+        ``docs/notes/2026-11-30-lns-kicks.md``).
     """
 
     asymmetric = True
