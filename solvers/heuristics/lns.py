@@ -247,16 +247,12 @@ class _Search:
                     if kind == "regional" else self.start_tour("random", deadline)
                 base, base_cost = self.local_search(fresh)
                 heat, fails = 1.0, 0
-                if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
-                    run.best, run.best_cost = base.copy(), base_cost
-                    self.progress(run.best_cost)
+                self.offer(run, base, base_cost)
             elif mirror and run.trials == 1:
                 saved, mirror = (base, base_cost, heat, fails), False
                 base, base_cost = self.local_search(run.best[::-1])
                 heat = 1.0
-                if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
-                    run.best, run.best_cost = base.copy(), base_cost
-                    self.progress(run.best_cost)
+                self.offer(run, base, base_cost)
             cur, trial_best = base.copy(), base.copy()
             settings = self.trial_settings(cur, heat, iterations, patience)
             costs = np.array([base_cost, run.best_cost, base_cost])
@@ -310,18 +306,21 @@ class _Search:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
                 if s.kicks:  # double-bridge kicks of the base
                     base_cost = self.kick(base, base_cost, s.kicks, deadline)
-                    if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
-                        run.best, run.best_cost = base.copy(), base_cost
-                        self.progress(base_cost)
+                    self.offer(run, base, base_cost)
                 if self.fail_passes and self.regions is not None:  # re-solve the base's regions
                     gain = self.polish(run, base, deadline, [rng], self.fail_passes,
                                        temperature=s.fail_temperature)
                     if gain > 0.0:
                         base_cost = p.tour_cost(base)
-                        if base_cost < run.best_cost - REL_TOL * abs(run.best_cost):
-                            run.best, run.best_cost = base.copy(), base_cost
-                            self.progress(base_cost)
+                        self.offer(run, base, base_cost)
             run.converged = run.converged or run.trials >= s.trial_count
+
+    def offer(self, run: _Run, tour: np.ndarray, cost: float) -> None:
+        """A copy of ``tour`` (of cost ``cost``) becomes ``run``'s best, reported to
+        ``progress``, when it is cheaper beyond the tolerance."""
+        if cost < run.best_cost - REL_TOL * abs(run.best_cost):
+            run.best, run.best_cost = tour.copy(), cost
+            self.progress(cost)
 
     def kick(self, tour: np.ndarray, cost: float, count: int, deadline: float | None) -> float:
         """``count`` double-bridge kicks of ``tour`` (changed in place), each followed by the

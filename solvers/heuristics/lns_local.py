@@ -385,9 +385,10 @@ def kick_search(t: np.ndarray, cost: float, count: int, edge: np.ndarray, node: 
     replaces it: the iterated local search of Lin-Kernighan solvers. Returns the cost of ``t``.
 
     A kick cuts the cycle at three random places and swaps the two middle runs (``A B C D`` to
-    ``A C B D``): four edges change at once, far apart, and no run is reversed (directed costs
-    keep their direction). It reaches tours that no chain of improving 2-opt, or-opt and move
-    steps reaches. Cycles of fewer than 8 clusters are left as they are.
+    ``A C B D``): three edges, far apart, change at once, whether or not that pays, and no run is
+    reversed (directed costs keep their direction); the local search from there reaches tours
+    that no chain of improving 2-opt, or-opt and move steps reaches. Cycles of fewer than 8
+    clusters are left as they are.
     """
     n = len(t)
     if n < 8:
