@@ -128,6 +128,8 @@ class _Search:
                                      math.ceil(settings.remove_fraction * n)))
         #: Passes of region re-solves after a failed trial (``fail_passes``; 0 on directed costs).
         self.fail_passes = settings.fail_passes_for(n, self.symmetric)
+        #: Double-bridge kicks after a failed trial (``kicks``).
+        self.kicks = settings.kicks_for(n, self.symmetric)
         #: The regions of the end phase (above ``LARGE`` clusters) and of ``fail_passes``:
         #: symmetric costs only (:meth:`polish`); none where neither can run.
         wanted = self.symmetric and (n > LARGE or self.fail_passes > 0)
@@ -304,8 +306,8 @@ class _Search:
                 base, base_cost, heat, fails = trial_best.copy(), float(costs[2]), 1.0, 0
             else:
                 heat, fails = min(MAX_HEAT, 2 * heat), fails + 1
-                if s.kicks:  # double-bridge kicks of the base
-                    base_cost = self.kick(base, base_cost, s.kicks, deadline)
+                if self.kicks:  # double-bridge kicks of the base
+                    base_cost = self.kick(base, base_cost, self.kicks, deadline)
                     self.offer(run, base, base_cost)
                 if self.fail_passes and self.regions is not None:  # re-solve the base's regions
                     gain = self.polish(run, base, deadline, [rng], self.fail_passes,
@@ -493,10 +495,10 @@ class Lns:
         and trials as after a cold restart (default 0, off; the notes measure 0.3).
     kicks
         Double-bridge kicks of the start of each trial that did not improve it, each followed by
-        the local search and kept when no dearer (>= 0; default 0, off: an iterated local search
-        between the trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; lower
-        gaps at 60 s on most runs of six files of 235-464 clusters, mixed at GLNS's short budgets:
-        ``docs/notes/2026-11-30-lns-kicks.md``).
+        the local search and kept when no dearer (>= 0; an iterated local search between the
+        trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; default 10,000 from
+        200 to 400 clusters on symmetric costs with effort ``budget``, else 0:
+        :meth:`LnsSettings.kicks_for`).
     """
 
     asymmetric = True
@@ -517,7 +519,7 @@ class Lns:
         path_temperature: float = 3.0,
         fail_passes: int | None = None, fail_temperature: float = 3.0,
         workers: int | None = None, exchange: float = 0.5, mirror: bool | None = None,
-        plateau: bool | None = None, regional: float | None = None, kicks: int = 0,
+        plateau: bool | None = None, regional: float | None = None, kicks: int | None = None,
     ) -> None:
         self.settings = LnsSettings(iterations, trials, patience, remove_fraction, max_removals,
                                     start_temperature, end_temperature, reaction, noise,

@@ -12,6 +12,7 @@ import pytest
 from gtsp_bench.solvers.heuristics import lns as lns_module
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.lns import EFFORTS, LARGE, LnsSettings, _Search, restart_kind
+from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, KICKS
 
 from gtsp_bench.data.io import read_instance
 from gtsp_bench.energy import evaluate
@@ -617,8 +618,8 @@ def test_regional_restarts_leave_stopping_efforts_alone():
 
 def test_kicks_run_after_failed_trials_only_when_asked(monkeypatch):
     """With ``kicks`` a budget run kicks the start of each failed trial (that many kicks in all
-    per failed trial) and still ends at the DP optimum, never below; without it (the default) no
-    kick is made; a negative count is refused."""
+    per failed trial) and still ends at the DP optimum, never below; with 0 (the default at 10
+    clusters) no kick is made; a negative count is refused."""
     inst = generate_instance(9, 3, seed=4)
     optimum = run_solver("dp", inst, 0.5).objective
     kick_search = kernels.kick_search
@@ -639,3 +640,30 @@ def test_kicks_run_after_failed_trials_only_when_asked(monkeypatch):
         assert all(n <= lns_module.KICK_CHUNK for n in calls)
     with pytest.raises(InputError, match="kicks"):
         get_solver("lns", kicks=-1)
+
+
+@pytest.mark.parametrize("n, symmetric, options, kicks", [
+    (FAIL_FROM, True, {"effort": "budget"}, KICKS),
+    (LARGE, True, {"effort": "budget"}, KICKS),
+    (FAIL_FROM - 1, True, {"effort": "budget"}, 0),  # below FAIL_FROM: off by default
+    (LARGE + 1, True, {"effort": "budget"}, 0),  # above LARGE: off by default
+    (FAIL_FROM, True, {}, 0),  # the default effort stops after its trials: off
+    (FAIL_FROM, True, {"effort": "fast"}, 0),
+    (FAIL_FROM, True, {"stop_at_convergence": False}, KICKS),  # effort budget by its old name
+    (FAIL_FROM, False, {"effort": "budget"}, 0),  # directed costs: off by default
+    (12, False, {"kicks": 7}, 7),  # given: at any size, either kind of costs
+    (FAIL_FROM, True, {"effort": "budget", "kicks": 0}, 0),
+])
+def test_kicks_by_size(n, symmetric, options, kicks):
+    """Kicks after a failed trial: ``kicks``, by default KICKS from FAIL_FROM to LARGE clusters
+    on symmetric costs with effort ``budget``, else 0."""
+    assert LnsSettings(**options).kicks_for(n, symmetric) == kicks
+
+
+@pytest.mark.parametrize("k, kicks", [(FAIL_FROM - 1, KICKS), (FAIL_FROM - 2, 0)])
+def test_budget_search_kicks_from_fail_from(k, kicks):
+    """A budget search on a UAV instance of FAIL_FROM clusters (K = FAIL_FROM - 1 and the base
+    station) kicks its failed trials' starts by default; one of a cluster fewer does not."""
+    problem = price(generate_instance(k, 2, seed=3, zeta=10.0, area=4000.0), 0.5)
+    search = _Search(problem, LnsSettings(effort="budget"), np.random.default_rng(0))
+    assert search.kicks == kicks
