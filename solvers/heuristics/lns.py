@@ -496,9 +496,9 @@ class Lns:
     kicks
         Double-bridge kicks of the start of each trial that did not improve it, each followed by
         the local search and kept when no dearer (>= 0; an iterated local search between the
-        trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; default 10,000 from
-        200 to 400 clusters on symmetric costs with effort ``budget``, else 0:
-        :meth:`LnsSettings.kicks_for`).
+        trials, :func:`~gtsp_bench.solvers.heuristics.lns_local.kick_search`; default 10,000 with
+        effort ``budget`` from 200 to 400 clusters on symmetric costs and at every size on
+        directed ones, else 0: :meth:`LnsSettings.kicks_for`).
     """
 
     asymmetric = True

@@ -650,13 +650,16 @@ def test_kicks_run_after_failed_trials_only_when_asked(monkeypatch):
     (FAIL_FROM, True, {}, 0),  # the default effort stops after its trials: off
     (FAIL_FROM, True, {"effort": "fast"}, 0),
     (FAIL_FROM, True, {"stop_at_convergence": False}, KICKS),  # effort budget by its old name
-    (FAIL_FROM, False, {"effort": "budget"}, 0),  # directed costs: off by default
+    (FAIL_FROM, False, {"effort": "budget"}, KICKS),  # directed costs: at every size
+    (12, False, {"effort": "budget"}, KICKS),
+    (LARGE + 1, False, {"effort": "budget"}, KICKS),
+    (12, False, {"effort": "default"}, 0),  # an effort that stops: off on directed costs too
     (12, False, {"kicks": 7}, 7),  # given: at any size, either kind of costs
     (FAIL_FROM, True, {"effort": "budget", "kicks": 0}, 0),
 ])
 def test_kicks_by_size(n, symmetric, options, kicks):
-    """Kicks after a failed trial: ``kicks``, by default KICKS from FAIL_FROM to LARGE clusters
-    on symmetric costs with effort ``budget``, else 0."""
+    """Kicks after a failed trial: ``kicks``, by default KICKS with effort ``budget`` from
+    FAIL_FROM to LARGE clusters on symmetric costs and at every size on directed ones, else 0."""
     assert LnsSettings(**options).kicks_for(n, symmetric) == kicks
 
 
