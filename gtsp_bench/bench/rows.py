@@ -54,6 +54,8 @@ COLUMNS = (
     "time_to_0p1pct_s",
 )
 REFERENCE_KINDS = ("optimal", "best_known", "best_found")
+#: The columns that name one solve in a benchmark's rows (:func:`merge_rows`).
+ROW_KEY = ("set", "instance", "omega", "label", "seed")
 #: A gap at most this (percent) is a hit of the reference.
 HIT_GAP_PCT = 1e-6
 #: Notes of a row below its reference: an error for a proven optimum, news for a best known.
@@ -293,15 +295,70 @@ def read_rows(path: Any) -> pd.DataFrame:
     return df
 
 
+def _keys(df: pd.DataFrame) -> list[tuple[str, ...]]:
+    """Each row's :data:`ROW_KEY` as text (a missing omega, of a GTSPLIB row, as ``""``)."""
+    def text(v: Any, number: bool) -> str:
+        return "" if pd.isna(v) else repr(float(v)) if number else str(v)
+
+    cols = [[text(v, c == "omega") for v in df[c]] for c in ROW_KEY]
+    return list(zip(*cols, strict=True))
+
+
+def merge_rows(old: pd.DataFrame, new: pd.DataFrame) -> tuple[pd.DataFrame, int, int]:
+    """``old``'s rows with each solve of ``new`` (same :data:`ROW_KEY`) in place of its old row,
+    and ``new``'s other rows appended: a partial rerun folded into a whole benchmark's rows.
+
+    Returns
+    -------
+    tuple
+        The merged frame (``old``'s order, then the added rows), the rows replaced, the rows
+        added.
+
+    Raises
+    ------
+    ValueError
+        When the frames are rows of different benchmarks, when a solve appears twice in one of
+        them, or when a row's reference is the best found of its own run (``best_found``: it
+        depends on the other rows of that run, so a merge could leave a gap to a value that is
+        no longer the best of the table).
+    """
+    benchmarks = set(old["benchmark"]) | set(new["benchmark"])
+    if len(benchmarks) > 1:
+        raise ValueError(f"rows of different benchmarks: {', '.join(sorted(map(str, benchmarks)))}")
+    for name, df in (("the old rows", old), ("the new rows", new)):
+        if (df["reference_kind"] == "best_found").any():
+            raise ValueError(f"{name} have gaps to the best found of their own run; "
+                             "run the whole benchmark instead")
+        keys = _keys(df)
+        if len(set(keys)) < len(keys):
+            twice = next(k for k in keys if keys.count(k) > 1)
+            raise ValueError(f"{name} hold one solve twice ({', '.join(twice)})")
+    where = {k: i for i, k in enumerate(_keys(old))}
+    merged = old[list(COLUMNS)].copy()
+    added = []
+    replaced = 0
+    for j, key in enumerate(_keys(new)):
+        if key in where:
+            merged.iloc[where[key]] = new[list(COLUMNS)].iloc[j]
+            replaced += 1
+        else:
+            added.append(j)
+    if added:
+        merged = pd.concat([merged, new[list(COLUMNS)].iloc[added]], ignore_index=True)
+    return merged, replaced, len(added)
+
+
 __all__ = [
     "BELOW_OPTIMUM",
     "BETTER_THAN_BEST_KNOWN",
     "COLUMNS",
     "HIT_GAP_PCT",
     "REFERENCE_KINDS",
+    "ROW_KEY",
     "Cell",
     "RefValue",
     "make_rows",
+    "merge_rows",
     "read_rows",
     "references",
     "summary_markdown",

@@ -8,6 +8,7 @@ or lists them. :mod:`gtsp_bench.cli` wires both into the command line and handle
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import shlex
 import sys
 from collections.abc import Sequence
@@ -37,6 +38,7 @@ examples:
   gtsp-bench bench sets --set gtsplib --solvers greedy,lns --time-limit 5 --names 11berlin52,40d198
   gtsp-bench bench glns --solvers lns -p remove_fraction=0.15 --seeds 1..3 --out /tmp/rf
   gtsp-bench bench scale --set uav-K50-N20-s1 --omegas 0.2,0.8 --seeds 0..4 --out /tmp/k50
+  gtsp-bench bench glns --names 89rbg443 --out /tmp/part --merge-into results/glns
 """
 
 
@@ -94,6 +96,12 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                         "any OUT); a proven optimum is never changed")
     g.add_argument("--report-only", action="store_true",
                    help="solve nothing: redraw OUT's summary, tables and figures from OUT/rows.csv")
+    g.add_argument("--merge-into", metavar="DIR",
+                   help="after a run without failures, put its rows in place of the same solves' "
+                        "(set, instance, omega, label, seed) in DIR/rows.csv, add the others, and "
+                        "redraw DIR's summary, tables and figures from the result, as "
+                        "--report-only does (a partial rerun folded into a whole benchmark's "
+                        "rows; DIR/manifest.json records the command)")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
@@ -161,6 +169,58 @@ def report_only(name: str, settings: object) -> tuple[int, str]:
     return 0, text
 
 
+def check_merge(name: str, settings: object, target: Path) -> None:
+    """Refuse a ``--merge-into`` before anything runs: ``target`` must hold a benchmark's rows,
+    other than the run's own output folder."""
+    from gtsp_bench.bench.engine import configure
+    from gtsp_bench.bench.rows import read_rows
+
+    out_dir = Path(configure(name, settings).output_dir)  # type: ignore[arg-type]
+    if out_dir.resolve() == target.resolve():
+        raise InputError(f"{target}: --merge-into needs a folder other than the run's --out")
+    read_rows(target / "rows.csv")
+
+
+def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
+    """Fold a finished run's rows into ``target``'s (:func:`~gtsp_bench.bench.rows.merge_rows`),
+    record the command in its manifest and redraw its outputs (:func:`report_only`)."""
+    import dataclasses
+    import json
+
+    from gtsp_bench.bench.engine import configure
+    from gtsp_bench.bench.rows import merge_rows, read_rows
+    from gtsp_bench.data.io import atomic_write_text
+
+    run_dir = Path(configure(name, settings).output_dir)  # type: ignore[arg-type]
+    new, old = read_rows(run_dir / "rows.csv"), read_rows(target / "rows.csv")
+    try:
+        merged, replaced, added = merge_rows(old, new)
+    except ValueError as e:
+        raise InputError(f"{target / 'rows.csv'}: cannot merge: {e}") from None
+    manifest_path = target / "manifest.json"
+    try:
+        manifest = json.loads(manifest_path.read_text())
+    except (OSError, ValueError):
+        manifest = {}
+    try:  # the run's own provenance: its code and machine
+        run = json.loads((run_dir / "manifest.json").read_text())
+    except (OSError, ValueError):
+        run = {}
+    manifest.setdefault("merges", []).append({
+        "command": settings.command,  # type: ignore[attr-defined]
+        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        **{k: run.get(k) for k in ("git_commit", "git_dirty", "cpu_model")},
+        "replaced": replaced, "added": added})
+    atomic_write_text(target / "rows.csv", merged.to_csv(index=False, float_format="%.10g"))
+    atomic_write_text(manifest_path, json.dumps(manifest, indent=1) + "\n")
+    print(f"merged into {target / 'rows.csv'}: {replaced} rows replaced, {added} added",
+          file=sys.stderr)
+    whole = dataclasses.replace(  # the whole benchmark's outputs, in target
+        settings, out_dir=target, solvers=None, ks=None, sets=None, names=None, instances=None,  # type: ignore[type-var]
+        nodes=None, omegas=None, seeds=None, time_limit=None, params=())
+    return report_only(name, whole)
+
+
 def run_bench_command(args: argparse.Namespace, answer: TextIO, argv: Sequence[str] | None = None) -> int:
     """Run ``gtsp-bench bench``; the summary is the answer on ``answer``; the exit code."""
     if args.list:
@@ -172,11 +232,20 @@ def run_bench_command(args: argparse.Namespace, answer: TextIO, argv: Sequence[s
     from gtsp_bench.bench.engine import run_benchmark
 
     settings = settings_from(args, argv)
+    target = Path(args.merge_into) if args.merge_into else None
+    if target is not None:
+        if args.report_only:
+            raise InputError("--merge-into: give it a run to merge, not --report-only")
+        check_merge(args.name, settings, target)
     if args.report_only:
         code, text = report_only(args.name, settings)
     else:
         outcome = run_benchmark(args.name, settings)  # type: ignore[arg-type]
         code, text = (1 if outcome.failed or outcome.errors else 0), outcome.answer
+        if target is not None and code == 0:
+            code, text = merge_into(args.name, settings, target)
+        elif target is not None:
+            print(f"{target}: not merged (the run had failed solves or errors)", file=sys.stderr)
     if text:
         answer.write(text.rstrip("\n") + "\n")
         answer.flush()

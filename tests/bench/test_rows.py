@@ -1,12 +1,13 @@
 """The row schema and the reference rule: proven optima of exact tasks, the set's table, a
 benchmark's own proofs, the best found; tours below a proven optimum and disagreeing proofs are
-errors; a best known value beaten becomes the best found."""
+errors; a best known value beaten becomes the best found; a partial rerun merged by solve."""
 
 from __future__ import annotations
 
 import math
 
 import pandas as pd
+import pytest
 
 from gtsp_bench.bench.definitions import Reference, Run
 from gtsp_bench.bench.outputs import errors_of
@@ -16,6 +17,7 @@ from gtsp_bench.bench.rows import (
     COLUMNS,
     Cell,
     make_rows,
+    merge_rows,
     references,
     summary_table,
 )
@@ -109,3 +111,39 @@ def test_summary_counts_hits_proofs_failures():
     assert s.loc["a", "hits"] == 1 and s.loc["a", "proven"] == 1
     assert math.isclose(s.loc["b", "mean_gap_pct"], 10.0) and s.loc["b", "hits"] == 0
     assert s.loc["c", "failed"] == 1 and pd.isna(s.loc["c", "mean_gap_pct"])
+
+
+def _rows(*solves: tuple[str, float | None, int, float], benchmark: str = "b",
+          kind: str = "best_known") -> pd.DataFrame:
+    """Rows of (instance, omega, seed, objective) solves of one label."""
+    out = pd.DataFrame([{c: None for c in COLUMNS} for _ in solves])
+    out["benchmark"], out["set"], out["label"], out["reference_kind"] = benchmark, "s", "lns", kind
+    out["instance"] = [x[0] for x in solves]
+    out["omega"] = [x[1] for x in solves]
+    out["seed"] = [x[2] for x in solves]
+    out["objective"] = [x[3] for x in solves]
+    return out
+
+
+def test_merge_replaces_the_same_solves_and_appends_the_others():
+    """A rerun's rows take the place of the rows of the same (set, instance, omega, label, seed),
+    in the old order; solves the old rows lack are appended; the rest is left as it was."""
+    old = _rows(("a", None, 1, 10.0), ("a", None, 2, 11.0), ("b", 0.5, 1, 20.0), ("b", 0.25, 1, 21.0))
+    new = _rows(("b", 0.5, 1, 19.0), ("a", None, 2, 10.5), ("c", None, 1, 30.0))
+    merged, replaced, added = merge_rows(old, new)
+    assert (replaced, added) == (2, 1)
+    assert merged["instance"].tolist() == ["a", "a", "b", "b", "c"]
+    assert merged["objective"].tolist() == [10.0, 10.5, 19.0, 21.0, 30.0]
+    assert list(merged.columns) == list(COLUMNS)
+    assert old["objective"].tolist() == [10.0, 11.0, 20.0, 21.0]  # the inputs are not changed
+
+
+@pytest.mark.parametrize("old, new, message", [
+    (_rows(("a", None, 1, 1.0)), _rows(("a", None, 1, 1.0), benchmark="c"), "different benchmarks"),
+    (_rows(("a", None, 1, 1.0), ("a", None, 1, 2.0)), _rows(("a", None, 1, 1.0)), "one solve twice"),
+    (_rows(("a", None, 1, 1.0)), _rows(("a", None, 1, 1.0), kind="best_found"), "best found"),
+])
+def test_merge_refuses_what_it_cannot_fold(old, new, message):
+    """Rows of another benchmark, a solve twice, or gaps to a run's own best found: refused."""
+    with pytest.raises(ValueError, match=message):
+        merge_rows(old, new)

@@ -1,5 +1,6 @@
 """The bench command (gtsp_bench.cli.bench): one set of options for every benchmark, each checked
-before anything runs or is written; --list; --report-only redraws a run from its rows.csv."""
+before anything runs or is written; --list; --report-only redraws a run from its rows.csv;
+--merge-into folds a partial rerun into a whole run's rows."""
 
 from __future__ import annotations
 
@@ -69,3 +70,44 @@ def test_list_lines_up_its_columns():
     column = lines[0].index("what it measures")
     for line, b in zip(lines[1:], BENCHMARKS.values(), strict=True):
         assert line.index(b.description) == column, b.name
+
+
+def test_merge_into_folds_a_partial_rerun_into_a_whole_run(tmp_path, capsys):
+    """--merge-into: the rerun's rows replace the same solves' rows of DIR/rows.csv, the others
+    stay, DIR's summary is redrawn and its manifest names the command."""
+    import json
+
+    whole, part = tmp_path / "whole", tmp_path / "part"
+    argv = ["bench", "heuristics", "-K", "3", "--nodes", "4", "--solvers", "greedy", "--jobs", "1",
+            "--instance-dir", str(tmp_path / "inst"), "--no-progress"]
+    assert main([*argv, "--instances", "2", "--out", str(whole)]) == 0
+    rows = pd.read_csv(whole / "rows.csv")
+    right = rows["objective"].tolist()
+    rows.loc[0, "objective"] = 1e9  # a stale row, that the rerun of the first instance replaces
+    rows.to_csv(whole / "rows.csv", index=False)
+    capsys.readouterr()
+    assert main([*argv, "--instances", "1", "--out", str(part), "--merge-into", str(whole)]) == 0
+    captured = capsys.readouterr()
+    assert "1 rows replaced, 0 added" in captured.err
+    merged = pd.read_csv(whole / "rows.csv")
+    assert merged["objective"].tolist() == pytest.approx(right)
+    assert merged["instance"].tolist() == rows["instance"].tolist()
+    assert "| 2 |" in (whole / "summary.md").read_text() and "| 2 |" in captured.out
+    merges = json.loads((whole / "manifest.json").read_text())["merges"]
+    assert len(merges) == 1 and "--merge-into" in merges[0]["command"]
+    assert merges[0]["replaced"] == 1 and merges[0]["added"] == 0
+
+
+@pytest.mark.parametrize("target, message", [
+    ("missing", "rows.csv: cannot read the rows"),
+    ("out", "needs a folder other than the run's --out"),
+])
+def test_merge_into_a_bad_folder_is_refused_before_anything_runs(tmp_path, capsys, target, message):
+    """--merge-into a folder without rows, or the run's own --out: one line, exit 2, no output."""
+    out = tmp_path / "out"
+    code = main(["bench", "heuristics", "-K", "3", "--nodes", "4", "--instances", "1", "--solvers",
+                 "greedy", "--out", str(out), "--merge-into", str(tmp_path / target),
+                 "--instance-dir", str(tmp_path / "inst"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("gtsp-bench: error: ") and err.count("\n") == 1, err
+    assert message in err and not out.exists()
