@@ -130,12 +130,16 @@ def _made_by(bench: Benchmark, df: pd.DataFrame, command: str) -> str:
 
 
 def run_command(out_dir: Path) -> str:
-    """The command a run into ``out_dir`` was made with (its ``manifest.json``), else ``""``."""
+    """The command a run into ``out_dir`` was made with (its ``manifest.json``), else ``""``;
+    then the commands of the partial reruns merged into it (``--merge-into``), each quoted on its
+    own (joined by ``"`, then `"``: the page shows them in code spans after "Made by")."""
     import json
 
     try:
-        return str(json.loads((out_dir / "manifest.json").read_text())["command"])
-    except (OSError, ValueError, KeyError, TypeError):
+        manifest = json.loads((out_dir / "manifest.json").read_text())
+        merges = [str(m["command"]) for m in manifest.get("merges", [])]
+        return "`, then `".join([str(manifest["command"]), *merges])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return ""
 
 

@@ -175,7 +175,10 @@ def check_merge(name: str, settings: object, target: Path) -> None:
     from gtsp_bench.bench.engine import configure
     from gtsp_bench.bench.rows import read_rows
 
-    out_dir = Path(configure(name, settings).output_dir)  # type: ignore[arg-type]
+    bench = configure(name, settings)  # type: ignore[arg-type]
+    if bench.planner == "paper":
+        raise InputError(f"{target}: --merge-into: the paper benchmark writes no rows.csv to merge")
+    out_dir = Path(bench.output_dir)
     if out_dir.resolve() == target.resolve():
         raise InputError(f"{target}: --merge-into needs a folder other than the run's --out")
     read_rows(target / "rows.csv")

@@ -179,3 +179,18 @@ def test_update_reference_keeps_the_omegas_a_set_holds(tmp_path):
     # the references benchmark fills a set's grid: it adds the point
     OUTPUTS["update-references"](BENCHMARKS["references"], df, tmp_path, settings, said.append)
     assert set(read_reference(folder / "reference.csv")) == {("i1", 0.5), ("i1", 0.9)}
+
+
+def test_run_command_names_the_merged_reruns(tmp_path):
+    """A page's "Made by" quotes the run's command, then each partial rerun merged into it."""
+    import json
+
+    from gtsp_bench.bench.output_kinds import run_command
+
+    assert run_command(tmp_path) == ""  # no manifest
+    manifest = {"command": "gtsp-bench bench glns"}
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    assert run_command(tmp_path) == "gtsp-bench bench glns"
+    manifest["merges"] = [{"command": "A --merge-into X"}, {"command": "B --merge-into X"}]
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    assert run_command(tmp_path) == "gtsp-bench bench glns`, then `A --merge-into X`, then `B --merge-into X"

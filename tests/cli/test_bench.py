@@ -111,3 +111,11 @@ def test_merge_into_a_bad_folder_is_refused_before_anything_runs(tmp_path, capsy
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("gtsp-bench: error: ") and err.count("\n") == 1, err
     assert message in err and not out.exists()
+
+
+def test_merge_into_is_refused_for_the_paper_benchmark(tmp_path, capsys):
+    """The paper benchmark writes experiment CSV files, no rows.csv: nothing to merge."""
+    code = main(["bench", "paper", "--out", str(tmp_path / "out"), "--merge-into", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and "the paper benchmark writes no rows.csv" in err, err
+    assert not (tmp_path / "out").exists()
