@@ -19,7 +19,7 @@ from gtsp_bench.solvers.heuristics.lns_paths import (
     region_passes,
     shared_region_passes,
 )
-from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, FAIL_TO
+from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, FAIL_TO, PATHS, PATHS_ABOVE_FAIL_TO
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
 from gtsp_bench.energy import evaluate
@@ -252,9 +252,9 @@ def test_default_run_ends_with_regions_above_large():
 
 
 @pytest.mark.parametrize("n, symmetric, options, timed, share", [
-    (LARGE + 1, True, {"effort": "budget"}, True, 0.3),
-    (FAIL_TO, True, {"effort": "budget"}, True, 0.3),
-    (FAIL_TO + 1, True, {"effort": "budget"}, True, 0.8),  # no region passes between trials
+    (LARGE + 1, True, {"effort": "budget"}, True, PATHS),
+    (FAIL_TO, True, {"effort": "budget"}, True, PATHS),
+    (FAIL_TO + 1, True, {"effort": "budget"}, True, PATHS_ABOVE_FAIL_TO),  # no passes between trials
     (FAIL_TO + 1, True, {"paths": 0.3, "effort": "budget"}, True, 0.3),
     (FAIL_TO + 1, True, {"effort": "default"}, True, 0.0),
     (LARGE + 1, True, {"paths": 0.15, "effort": "budget"}, True, 0.15),
@@ -266,7 +266,7 @@ def test_default_run_ends_with_regions_above_large():
     (LARGE + 1, True, {"paths": 0.0}, True, 0.0),
 ])
 def test_share_of_the_budget_for_regions(n, symmetric, options, timed, share):
-    """The end phase's share: ``paths`` (default 0.3, 0.8 above FAIL_TO clusters) above LARGE
+    """The end phase's share: ``paths`` (default PATHS, PATHS_ABOVE_FAIL_TO above FAIL_TO) above LARGE
     clusters on symmetric costs in a time-limited run with effort ``budget``, else none."""
     assert LnsSettings(**options).path_share_for(n, symmetric, timed) == share
 
