@@ -76,10 +76,21 @@ class Settings:
     def narrowed(self) -> list[str]:
         """The options that make this run other than its definition (a subset, another
         budget, other settings): such a run does not refresh the docs' generated tables."""
-        given = {"--solvers": self.solvers, "-K": self.ks, "--set": self.sets, "--names": self.names,
-                 "--instances": self.instances, "--nodes": self.nodes, "--omegas": self.omegas,
-                 "--seeds": self.seeds, "--time-limit": self.time_limit, "-p": self.params or None}
+        given = {flag: getattr(self, name) for flag, name in _NARROWING.items()}
+        given["-p"] = self.params or None  # no params: the empty tuple
         return [flag for flag, value in given.items() if value is not None]
+
+    def whole(self, out_dir: Path) -> Settings:
+        """These settings into ``out_dir`` without what :meth:`narrowed` names: the whole
+        benchmark's outputs (``--merge-into`` redraws them)."""
+        cleared = {name: () if name == "params" else None for name in _NARROWING.values()}
+        return replace(self, out_dir=out_dir, **cleared)
+
+
+#: The options that narrow a run (:meth:`Settings.narrowed`): flag -> field of :class:`Settings`.
+_NARROWING = {"--solvers": "solvers", "-K": "ks", "--set": "sets", "--names": "names",
+              "--instances": "instances", "--nodes": "nodes", "--omegas": "omegas",
+              "--seeds": "seeds", "--time-limit": "time_limit", "-p": "params"}
 
 
 #: The solver option (``-p initial=best-known``) that starts each solve of a GTSPLIB file from the

@@ -325,27 +325,26 @@ def merge_rows(old: pd.DataFrame, new: pd.DataFrame) -> tuple[pd.DataFrame, int,
     benchmarks = set(old["benchmark"]) | set(new["benchmark"])
     if len(benchmarks) > 1:
         raise ValueError(f"rows of different benchmarks: {', '.join(sorted(map(str, benchmarks)))}")
+    keys = {}
     for name, df in (("the old rows", old), ("the new rows", new)):
         if (df["reference_kind"] == "best_found").any():
             raise ValueError(f"{name} have gaps to the best found of their own run; "
                              "run the whole benchmark instead")
-        keys = _keys(df)
-        if len(set(keys)) < len(keys):
-            twice = next(k for k in keys if keys.count(k) > 1)
+        keys[name] = _keys(df)
+        if len(set(keys[name])) < len(keys[name]):
+            twice = next(k for k in keys[name] if keys[name].count(k) > 1)
             raise ValueError(f"{name} hold one solve twice ({', '.join(twice)})")
-    where = {k: i for i, k in enumerate(_keys(old))}
-    merged = old[list(COLUMNS)].copy()
+    where = {k: i for i, k in enumerate(keys["the old rows"])}
+    merged, fresh = old[list(COLUMNS)].copy(), new[list(COLUMNS)]
     added = []
-    replaced = 0
-    for j, key in enumerate(_keys(new)):
+    for j, key in enumerate(keys["the new rows"]):
         if key in where:
-            merged.iloc[where[key]] = new[list(COLUMNS)].iloc[j]
-            replaced += 1
+            merged.iloc[where[key]] = fresh.iloc[j]
         else:
             added.append(j)
     if added:
-        merged = pd.concat([merged, new[list(COLUMNS)].iloc[added]], ignore_index=True)
-    return merged, replaced, len(added)
+        merged = pd.concat([merged, fresh.iloc[added]], ignore_index=True)
+    return merged, len(new) - len(added), len(added)
 
 
 __all__ = [

@@ -184,10 +184,20 @@ def check_merge(name: str, settings: object, target: Path) -> None:
     read_rows(target / "rows.csv")
 
 
+def _manifest(folder: Path) -> dict:
+    """``folder/manifest.json`` as a dict (empty when it is missing or unreadable)."""
+    import json
+
+    try:
+        data = json.loads((folder / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
 def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
     """Fold a finished run's rows into ``target``'s (:func:`~gtsp_bench.bench.rows.merge_rows`),
     record the command in its manifest and redraw its outputs (:func:`report_only`)."""
-    import dataclasses
     import json
 
     from gtsp_bench.bench.engine import configure
@@ -200,28 +210,17 @@ def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
         merged, replaced, added = merge_rows(old, new)
     except ValueError as e:
         raise InputError(f"{target / 'rows.csv'}: cannot merge: {e}") from None
-    manifest_path = target / "manifest.json"
-    try:
-        manifest = json.loads(manifest_path.read_text())
-    except (OSError, ValueError):
-        manifest = {}
-    try:  # the run's own provenance: its code and machine
-        run = json.loads((run_dir / "manifest.json").read_text())
-    except (OSError, ValueError):
-        run = {}
+    manifest, run = _manifest(target), _manifest(run_dir)  # run: its code and machine
     manifest.setdefault("merges", []).append({
         "command": settings.command,  # type: ignore[attr-defined]
         "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
         **{k: run.get(k) for k in ("git_commit", "git_dirty", "cpu_model")},
         "replaced": replaced, "added": added})
     atomic_write_text(target / "rows.csv", merged.to_csv(index=False, float_format="%.10g"))
-    atomic_write_text(manifest_path, json.dumps(manifest, indent=1) + "\n")
+    atomic_write_text(target / "manifest.json", json.dumps(manifest, indent=1) + "\n")
     print(f"merged into {target / 'rows.csv'}: {replaced} rows replaced, {added} added",
           file=sys.stderr)
-    whole = dataclasses.replace(  # the whole benchmark's outputs, in target
-        settings, out_dir=target, solvers=None, ks=None, sets=None, names=None, instances=None,  # type: ignore[type-var]
-        nodes=None, omegas=None, seeds=None, time_limit=None, params=())
-    return report_only(name, whole)
+    return report_only(name, settings.whole(target))  # type: ignore[attr-defined]
 
 
 def run_bench_command(args: argparse.Namespace, answer: TextIO, argv: Sequence[str] | None = None) -> int:

@@ -476,3 +476,16 @@ def test_a_gtsplib_tour_below_the_best_known_is_kept_only_with_update_reference(
     assert err[-1].startswith(f"gtsp-bench: error: {lib / 'best_known.csv'}: 11berlin52: a tour of length ")
     assert "below the proven optimum" in err[-1]
     assert [p.name for p in (lib / "tours").iterdir()] == [row.tour.removeprefix("tours/")]
+
+
+def test_whole_settings_drop_what_narrows_a_run(tmp_path):
+    """Settings.whole: the same run into another folder without the options that narrowed it
+    (what --merge-into redraws); the rest, e.g. the executor, stays."""
+    from gtsp_bench.bench.engine import Settings
+
+    narrow = Settings(solvers=("lns",), ks=(10,), names=("a",), seeds=(1,), time_limit=5.0,
+                      params=(("kicks", 0),), executor="dask", command="c")
+    assert narrow.narrowed() == ["--solvers", "-K", "--names", "--seeds", "--time-limit", "-p"]
+    whole = narrow.whole(tmp_path)
+    assert whole.narrowed() == [] and whole.out_dir == tmp_path
+    assert (whole.executor, whole.command, whole.params) == ("dask", "c", ())
