@@ -31,20 +31,22 @@ not seen one) the order it gives is kept and the heads are chosen optimally for 
 tour is always priced exactly (:meth:`Problem.tour_cost`).
 
 What is controlled: ``runs``, ``max_trials``, ``subgradient`` (LKH's ``RUNS``, ``MAX_TRIALS``,
-``SUBGRADIENT``), the seed (LKH's ``SEED = seed + 1``, modulo 2^31 - 1), and the time limit,
-shared by the runs as LKH's per-run ``TIME_LIMIT`` (status ``time_limit`` when the whole solve
-reaches it). LKH checks that limit between trials and leaves out its preprocessing (the
-subgradient ascent that builds the candidate sets on the 2n-node symmetric graph of the ATSP),
-which always runs to the end and produces a first tour: about 0.5 s for n = 400 nodes, 4 s for
-n = 1000, 25 s for n = 2000 and about 2 minutes for n = 4000 (K = 200 clusters of 20) on a
-shared core, so large instances overshoot a short limit; ``subgradient=False`` cuts it to a
-fraction of a second. (LKH's ``TOTAL_TIME_LIMIT`` would count the preprocessing, but when it runs out first
-elkai returns no tour at all.) A run that stops on its own (``MAX_TRIALS``, by default n) is
-reproducible for a seed; one stopped by the limit is not. A warm start becomes LKH's
-``INITIAL_TOUR_FILE``: the Noon-Bean tour of the given GTSP tour (:func:`atsp_tour`). elkai's LKH
-keeps that file name for every later call in the process (a later run without a warm start then
-fails on the deleted file), so a warm-started run happens in a forked child process
-(:func:`_solve_apart`). elkai's public
+``SUBGRADIENT``), the seed (LKH's ``SEED = seed + 1``, modulo 2^31 - 1), and the time limit, shared
+by the runs as LKH's per-run ``TIME_LIMIT`` (status ``time_limit`` when the whole solve reaches it).
+LKH checks that limit between trials and leaves out its preprocessing (the subgradient ascent that
+builds the candidate sets on the 2n-node symmetric graph of the ATSP), which always runs to the end
+and produces a first tour: about 0.5 s for n = 400 nodes, 4 s for n = 1000, 25 s for n = 2000 and
+about 2 minutes for n = 4000 (K = 200 clusters of 20) on a shared core, so large instances overshoot
+a short limit; ``subgradient=False`` cuts it to a fraction of a second. (LKH's ``TOTAL_TIME_LIMIT``
+would count the preprocessing, but when it runs out first elkai returns no tour at all.) A limit of
+a few milliseconds can still run out before LKH's first tour (elkai then returns none, by chance, as
+the clock falls): the solver then returns the warm start if given, else the paper's greedy tour from
+the depot (or the smallest cluster), with ``stats["fallback"]`` naming which and status
+``time_limit``. A run that stops on its own (``MAX_TRIALS``, by default n) is reproducible for a
+seed; one stopped by the limit is not. A warm start becomes LKH's ``INITIAL_TOUR_FILE``: the
+Noon-Bean tour of the given GTSP tour (:func:`atsp_tour`). elkai's LKH keeps that file name for
+every later call in the process (a later run without a warm start then fails on the deleted file),
+so a warm-started run happens in a forked child process (:func:`_solve_apart`). elkai's public
 ``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function it wraps,
 ``elkai._elkai.solve_problem(params, problem)``, with a full LKH parameter text.
 
@@ -63,6 +65,7 @@ from pathlib import Path
 
 import numpy as np
 from gtsp_bench.solvers.heads import optimal_heads
+from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 
 from gtsp_bench.checks import (
     check_bool,
@@ -262,10 +265,16 @@ class LKH:
                 params, text = self._params(left, seed, first), _problem_text(matrix)
                 found = elkai.solve_problem(params, text) if first is None else _solve_apart(params, text)
                 atsp = np.asarray(found, dtype=np.int64) - 1
-            if sorted(atsp.tolist()) != list(range(problem.n_nodes)):
+            if len(atsp) == 0:  # the limit ran out before LKH's first tour: a valid tour all the same
+                tour = (problem.to_tour(initial.order, initial.heads) if initial is not None
+                        else greedy_tour(problem, _greedy_start(problem)))
+                stats["fallback"] = "warm_start" if initial is not None else "greedy"
+                contiguous = True
+            elif sorted(atsp.tolist()) != list(range(problem.n_nodes)):
                 raise SolverError(f"LKH returned no tour through all nodes of {instance.name}")
-            tour, contiguous = tour_from_atsp(atsp, problem.cluster_of)
-            stats["atsp_cost"] = int(matrix[atsp, np.roll(atsp, -1)].sum())
+            else:
+                tour, contiguous = tour_from_atsp(atsp, problem.cluster_of)
+                stats["atsp_cost"] = int(matrix[atsp, np.roll(atsp, -1)].sum())
             if not contiguous:  # keep the cyclic order from the depot on, re-choose the heads
                 if problem.depot is not None:
                     tour = np.roll(tour, -int(np.flatnonzero(tour == problem.depot)[0]))
@@ -275,7 +284,8 @@ class LKH:
         order, heads = problem.to_solution(tour)
         seconds = time.perf_counter() - start
         return Solution(order, heads, objective=problem.tour_cost(tour),
-                        status="time_limit" if seconds >= time_limit else "feasible", stats=stats)
+                        status="time_limit" if seconds >= time_limit or "fallback" in stats else "feasible",
+                        stats=stats)
 
     def _params(self, seconds: float, seed: int, initial: Path | None = None) -> str:
         """LKH's parameter text: runs, trials, seed, precision, the time left (shared by the
@@ -332,6 +342,14 @@ def _problem_text(matrix: np.ndarray) -> str:
     rows = "\n".join(" ".join(map(str, row)) for row in matrix.tolist())
     return (f"TYPE : ATSP\nDIMENSION : {len(matrix)}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
             f"EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n{rows}\nEOF\n")
+
+
+def _greedy_start(problem: Problem) -> int:
+    """Where the fallback's greedy tour starts: the depot, else the first node of the smallest
+    cluster."""
+    if problem.depot is not None:
+        return int(problem.depot)
+    return int(min(problem.clusters, key=len)[0])
 
 
 def _tiny(problem: Problem) -> np.ndarray:

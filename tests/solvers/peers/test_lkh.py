@@ -13,7 +13,7 @@ from gtsp_bench.solvers.peers.lkh import noon_bean, scaled_weights, tour_from_at
 
 from gtsp_bench.cli import main
 from gtsp_bench.data import gtsplib
-from gtsp_bench.errors import InputError
+from gtsp_bench.errors import InputError, SolverError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import price
@@ -194,6 +194,41 @@ def test_time_limit_status():
     r = run_solver("lkh", inst, 0.5, time_limit=0.01)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(20))
+
+
+@pytest.mark.parametrize("warm", [False, True])
+def test_no_tour_from_lkh_falls_back(monkeypatch, warm):
+    """When the limit runs out before LKH's first tour (elkai returns none), the solver returns
+    the warm start if given, else the greedy tour from the depot, says which, status time_limit."""
+    inst = generate_instance(8, 4, seed=3)
+    start = run_solver("lkh", inst, 0.5) if warm else None
+    greedy = run_solver("greedy", inst, 0.5)
+
+    class Fake:
+        @staticmethod
+        def solve_problem(params: str, text: str) -> list[int]:
+            return []
+
+    monkeypatch.setattr(peer, "_import_elkai", lambda: Fake)
+    r = run_solver("lkh", inst, 0.5, time_limit=5.0, initial=start)
+    assert r.status == "time_limit"
+    assert r.stats["fallback"] == ("warm_start" if warm else "greedy")
+    expected = start if warm else greedy
+    assert (r.order, r.heads) == (expected.order, expected.heads)
+    assert r.objective == pytest.approx(expected.objective, rel=1e-12)
+    assert greedy.objective > run_solver("milp", inst, 0.5).objective  # the cases differ
+
+
+def test_a_partial_tour_from_lkh_is_an_error(monkeypatch):
+    """A tour that misses nodes (not the empty answer of a spent limit) is refused."""
+    class Fake:
+        @staticmethod
+        def solve_problem(params: str, text: str) -> list[int]:
+            return [1, 2, 3]
+
+    monkeypatch.setattr(peer, "_import_elkai", lambda: Fake)
+    with pytest.raises(SolverError, match="no tour through all nodes"):
+        run_solver("lkh", generate_instance(8, 4, seed=3), 0.5)
 
 
 @pytest.mark.parametrize("options", [{"runs": 0}, {"max_trials": 0}, {"runs": 1.5},
