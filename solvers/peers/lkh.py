@@ -39,16 +39,17 @@ and produces a first tour: about 0.5 s for n = 400 nodes, 4 s for n = 1000, 25 s
 about 2 minutes for n = 4000 (K = 200 clusters of 20) on a shared core, so large instances overshoot
 a short limit; ``subgradient=False`` cuts it to a fraction of a second. (LKH's ``TOTAL_TIME_LIMIT``
 would count the preprocessing, but when it runs out first elkai returns no tour at all.) A limit of
-a few milliseconds can still run out before LKH's first tour (elkai then returns none, by chance, as
-the clock falls): the solver then returns the warm start if given, else the paper's greedy tour from
-the depot (or the smallest cluster), with ``stats["fallback"]`` naming which and status
-``time_limit``. A run that stops on its own (``MAX_TRIALS``, by default n) is reproducible for a
-seed; one stopped by the limit is not. A warm start becomes LKH's ``INITIAL_TOUR_FILE``: the
-Noon-Bean tour of the given GTSP tour (:func:`atsp_tour`). elkai's LKH keeps that file name for
-every later call in the process (a later run without a warm start then fails on the deleted file),
-so a warm-started run happens in a forked child process (:func:`_solve_apart`). elkai's public
-``DistanceMatrix.solve_tsp`` takes only ``runs``; this solver calls the function it wraps,
-``elkai._elkai.solve_problem(params, problem)``, with a full LKH parameter text.
+a few milliseconds can still run out before LKH's first tour (elkai then returns none: a 0.01 s
+limit at K = 20 did in about 1 of 6 first calls of a process): the solver then returns the warm
+start if given, else the paper's greedy tour from the depot (or the smallest cluster), with
+``stats["fallback"]`` naming which and status ``time_limit``. A run that stops on its own
+(``MAX_TRIALS``, by default n) is reproducible for a seed; one stopped by the limit is not. A warm
+start becomes LKH's ``INITIAL_TOUR_FILE``: the Noon-Bean tour of the given GTSP tour
+(:func:`atsp_tour`). elkai's LKH keeps that file name for every later call in the process (a later
+run without a warm start then fails on the deleted file), so a warm-started run happens in a forked
+child process (:func:`_solve_apart`). elkai's public ``DistanceMatrix.solve_tsp`` takes only
+``runs``; this solver calls the function it wraps, ``elkai._elkai.solve_problem(params, problem)``,
+with a full LKH parameter text.
 
 LKH is free for academic and non-commercial use only (Keld Helsgaun's licence; elkai ships it
 under the same restriction). It is an optional extra: ``pip install 'gtsp-bench[lkh]'``.
