@@ -25,7 +25,9 @@ SETS = {k: (30, 1000.0) for k in range(4, 11)} | {20: (20, 1000.0), 50: (20, 150
                                                   100: (20, 2000.0), 200: (20, 3000.0)}
 FIELDS = ["instance", "omega", "value", "lower_bound", "status", "source", "date"]
 LARGE_OMEGAS = {0.3, 0.5, 0.6}
-SOURCE = re.compile(r"(dp|brute|[a-z][\w-]*( \d+(\.\d+)?s)?( seed \d+)?)$")
+#: A reference's source: ``dp``, ``brute``, or the engine's ``LABEL LIMITs seed S`` (a label may
+#: name its options, e.g. ``lns workers=1 60s seed 1``).
+SOURCE = re.compile(r"(dp|brute|[a-z][\w-]*( [a-z_]+=[\w./-]+)*( \d+(\.\d+)?s)?( seed \d+)?)$")
 
 
 def folder(k: int) -> Path:
