@@ -129,17 +129,27 @@ def _made_by(bench: Benchmark, df: pd.DataFrame, command: str) -> str:
     )
 
 
+def read_manifest(out_dir: Path) -> dict[str, Any]:
+    """``out_dir/manifest.json`` as a dict (empty when it is missing, unreadable or not an
+    object)."""
+    import json
+
+    try:
+        data = json.loads((out_dir / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
 def run_command(out_dir: Path) -> str:
     """The command a run into ``out_dir`` was made with (its ``manifest.json``), else ``""``;
     then the commands of the partial reruns merged into it (``--merge-into``), each quoted on its
     own (joined by ``"`, then `"``: the page shows them in code spans after "Made by")."""
-    import json
-
+    manifest = read_manifest(out_dir)
     try:
-        manifest = json.loads((out_dir / "manifest.json").read_text())
         merges = [str(m["command"]) for m in manifest.get("merges", [])]
         return "`, then `".join([str(manifest["command"]), *merges])
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+    except (KeyError, TypeError, AttributeError):
         return ""
 
 

@@ -184,23 +184,13 @@ def check_merge(name: str, settings: object, target: Path) -> None:
     read_rows(target / "rows.csv")
 
 
-def _manifest(folder: Path) -> dict:
-    """``folder/manifest.json`` as a dict (empty when it is missing or unreadable)."""
-    import json
-
-    try:
-        data = json.loads((folder / "manifest.json").read_text())
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
-
-
 def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
     """Fold a finished run's rows into ``target``'s (:func:`~gtsp_bench.bench.rows.merge_rows`),
     record the command in its manifest and redraw its outputs (:func:`report_only`)."""
     import json
 
     from gtsp_bench.bench.engine import configure
+    from gtsp_bench.bench.output_kinds import read_manifest
     from gtsp_bench.bench.rows import merge_rows, read_rows
     from gtsp_bench.data.io import atomic_write_text
 
@@ -210,7 +200,7 @@ def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
         merged, replaced, added = merge_rows(old, new)
     except ValueError as e:
         raise InputError(f"{target / 'rows.csv'}: cannot merge: {e}") from None
-    manifest, run = _manifest(target), _manifest(run_dir)  # run: its code and machine
+    manifest, run = read_manifest(target), read_manifest(run_dir)  # run: its code and machine
     manifest.setdefault("merges", []).append({
         "command": settings.command,  # type: ignore[attr-defined]
         "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
