@@ -29,6 +29,13 @@ def greedy_tour(problem: Problem, start: int) -> np.ndarray:
     return np.array(tour)
 
 
+def greedy_starts(problem: Problem) -> list[int]:
+    """Where the greedy tours start: the depot, else every node of the smallest cluster."""
+    if problem.depot is not None:
+        return [int(problem.depot)]
+    return [int(v) for v in min(problem.clusters, key=len)]
+
+
 class Greedy:
     """Nearest (cluster, head) pair by weighted energy, step by step."""
 
@@ -41,12 +48,7 @@ class Greedy:
     ) -> Solution:
         """Build the greedy tour (``time_limit`` and ``seed`` are not used)."""
         problem = price(instance, omega)
-        if problem.depot is not None:
-            starts = [problem.depot]
-        else:
-            smallest = min(problem.clusters, key=len)
-            starts = [int(v) for v in smallest]
-        tours = [greedy_tour(problem, s) for s in starts]
+        tours = [greedy_tour(problem, s) for s in greedy_starts(problem)]
         costs = [problem.tour_cost(t) for t in tours]
         best = int(np.argmin(costs))
         order, heads = problem.to_solution(tours[best])

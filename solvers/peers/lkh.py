@@ -66,7 +66,7 @@ from pathlib import Path
 
 import numpy as np
 from gtsp_bench.solvers.heads import optimal_heads
-from gtsp_bench.solvers.heuristics.greedy import greedy_tour
+from gtsp_bench.solvers.heuristics.greedy import greedy_starts, greedy_tour
 
 from gtsp_bench.checks import (
     check_bool,
@@ -268,7 +268,7 @@ class LKH:
                 atsp = np.asarray(found, dtype=np.int64) - 1
             if len(atsp) == 0:  # the limit ran out before LKH's first tour: a valid tour all the same
                 tour = (problem.to_tour(initial.order, initial.heads) if initial is not None
-                        else greedy_tour(problem, _greedy_start(problem)))
+                        else greedy_tour(problem, greedy_starts(problem)[0]))
                 stats["fallback"] = "warm_start" if initial is not None else "greedy"
                 contiguous = True
             elif sorted(atsp.tolist()) != list(range(problem.n_nodes)):
@@ -343,14 +343,6 @@ def _problem_text(matrix: np.ndarray) -> str:
     rows = "\n".join(" ".join(map(str, row)) for row in matrix.tolist())
     return (f"TYPE : ATSP\nDIMENSION : {len(matrix)}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
             f"EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n{rows}\nEOF\n")
-
-
-def _greedy_start(problem: Problem) -> int:
-    """Where the fallback's greedy tour starts: the depot, else the first node of the smallest
-    cluster."""
-    if problem.depot is not None:
-        return int(problem.depot)
-    return int(min(problem.clusters, key=len)[0])
 
 
 def _tiny(problem: Problem) -> np.ndarray:
