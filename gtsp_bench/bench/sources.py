@@ -16,11 +16,15 @@ import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gtsp_bench.bench.definitions import Committed, Generated, Gtsplib, Source
 from gtsp_bench.bench.tasks import StoredInstance, fingerprint
 from gtsp_bench.data.sets import ReferenceRow, SetFile, read_reference, read_set_file, resolve_set
 from gtsp_bench.errors import InputError
+
+if TYPE_CHECKING:
+    from gtsp_bench.data.gtsplib import Reference
 
 #: Where a committed set's generated files live: ``instances/uav-K{K}-N{N}-s{seed}``.
 GENERATED_SET = "uav-K{k}-N{n}-s{seed}"
@@ -142,11 +146,12 @@ def glns_times() -> dict[str, float]:
         raise InputError(f"{path}: cannot read GLNS's times ({e})") from None
 
 
-def _gtsplib(src: Gtsplib) -> list[Entry]:
+def gtsplib_references(src: Gtsplib) -> list[tuple[str, Reference]]:
+    """The files ``src`` picks, each with its group label and its ``best_known.csv`` row, in
+    the table's order (or ``src.names``')."""
     from gtsp_bench.data import gtsplib
 
     table = gtsplib.best_known()
-    glns = glns_times()
     refs = list(table.values())
     if src.names:
         missing = [n for n in src.names if n not in table]
@@ -155,7 +160,7 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
         picked = [("gtsplib", table[n]) for n in src.names]
     else:
         if src.group == "glns-45":
-            refs = [table[n] for n in glns]
+            refs = [table[n] for n in glns_times()]
         elif src.group == "samples":
             from gtsp_bench.bench.definitions import SAMPLES
 
@@ -175,16 +180,26 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
                 picked += [(label, r) for r in mine[: src.per_group]]
         else:
             picked = [("gtsplib", r) for r in refs]
+    return picked
+
+
+def _gtsplib(src: Gtsplib) -> list[Entry]:
+    from gtsp_bench.data import gtsplib
+
+    glns = glns_times()
     out = []
-    for label, r in picked:
+    for label, r in gtsplib_references(src):
         path = gtsplib.path(r.name)
         inst, text, digest = read_set_file(SetFile(path, r.name))
-        source = "Fischetti et al. 1997; GLKH tour" if r.proven else r.source or "GLKH"
-        ref = ReferenceRow(r.name, None, r.value, None, r.status, source, r.date)
-        out.append(
-            Entry(label, r.name, StoredInstance(inst, text, digest, path), {None: ref}, glns.get(r.name))
-        )
+        out.append(Entry(label, r.name, StoredInstance(inst, text, digest, path),
+                         {None: gtsplib_reference_row(r)}, glns.get(r.name)))
     return out
+
+
+def gtsplib_reference_row(r: Reference) -> ReferenceRow:
+    """A GTSPLIB file's ``best_known.csv`` row as the reference a solve of it is measured
+    against (distance-only: omega ``None``)."""
+    return ReferenceRow(r.name, None, r.value, None, r.status, r.reference_source, r.date)
 
 
 def best_known_tour(e: Entry) -> tuple[tuple[tuple[int, ...], tuple[int, ...]], str]:

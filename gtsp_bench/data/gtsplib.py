@@ -34,6 +34,9 @@ ENV_VAR = "GTSP_BENCH_GTSPLIB"
 #: The five instances the project's tests and benchmarks have always used (four proven optima
 #: and one best known).
 SAMPLES = ("11berlin52", "20kroA100", "40d198", "64lin318", "107att532")
+#: The largest symmetric GTSPLIB files proven optimal in the literature have this many nodes
+#: (Fischetti, Salazar-Gonzalez and Toth 1997); optima of larger ones are this package's proofs.
+PUBLISHED_FRONTIER = 442
 #: Values of :attr:`Reference.status`.
 STATUSES = ("optimal", "best_known")
 
@@ -100,6 +103,18 @@ class Reference:
     def proven(self) -> bool:
         """Whether :attr:`value` is a proven optimum."""
         return self.status == "optimal"
+
+    @property
+    def reference_source(self) -> str:
+        """Who proved :attr:`value` and whose tour it is, as a benchmark's rows name their
+        reference: the literature's proof up to :data:`PUBLISHED_FRONTIER` nodes, beyond it the
+        shipped certificate; a best known names its tour's source."""
+        tour = self.source or "GLKH"
+        if not self.proven:
+            return tour
+        if self.nodes > PUBLISHED_FRONTIER and self.certificate:
+            return f"milp, certificate {self.certificate}; {tour} tour"
+        return f"Fischetti et al. 1997; {tour} tour"
 
     @property
     def symmetric(self) -> bool:

@@ -247,8 +247,7 @@ def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
     files, refs = [], {}
     for r in table.values():  # AGTSP files too: symmetric-only solvers refuse them
         files.append(SetFile(where / f"{r.name}.gtsp.gz", r.name, r.clusters, r.nodes))
-        source = "Fischetti et al. 1997; GLKH tour" if r.proven else r.source or "GLKH"
-        refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, source, r.date)
+        refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, r.reference_source, r.date)
     return InstanceSet(name, where, tuple(files), refs, None)
 
 

@@ -149,6 +149,16 @@ def test_reference_status():
     assert sum(not r.symmetric for r in refs.values()) == 19
 
 
+def test_a_reference_names_who_proved_it_and_whose_tour_it_is():
+    """Rows measured against the library name the literature's proof up to 442 nodes, the shipped
+    certificate beyond, and only the tour's source for a best known."""
+    refs = gtsplib.best_known()
+    assert refs["11berlin52"].reference_source == "Fischetti et al. 1997; GLKH tour"
+    assert refs["99d493"].reference_source == "milp, certificate proofs/99d493.cert.json.gz; GLKH tour"
+    assert refs["115u574"].reference_source == "GLKH"
+    assert refs["464u2319"].reference_source == refs["464u2319"].source != "GLKH"  # a kept tour
+
+
 def test_glns_table_agrees_with_best_known():
     """glns-45.csv's instances and sizes are those of best_known.csv, and its (published)
     best-known values are the published column; the best_known column is lower only where a
