@@ -96,6 +96,12 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                         "any OUT); a proven optimum is never changed")
     g.add_argument("--report-only", action="store_true",
                    help="solve nothing: redraw OUT's summary, tables and figures from OUT/rows.csv")
+    g.add_argument("--re-reference", action="store_true",
+                   help="solve nothing: measure OUT/rows.csv against today's reference tables "
+                        "(the sets' reference.csv, GTSPLIB's best_known.csv) by the benchmark's "
+                        "reference rule, rewrite its reference and gap columns, then redraw as "
+                        "--report-only does (a reference proven by the run is kept; "
+                        "DIR/manifest.json records the command)")
     g.add_argument("--merge-into", metavar="DIR",
                    help="after a run without failures, put its rows in place of the same solves' "
                         "(set, instance, omega, label, seed) in DIR/rows.csv, add the others, and "
@@ -169,6 +175,46 @@ def report_only(name: str, settings: object) -> tuple[int, str]:
     return 0, text
 
 
+def re_reference(name: str, settings: object) -> tuple[int, str]:
+    """Measure a finished run's rows against today's reference tables
+    (:func:`~gtsp_bench.bench.rereference.rereference`), record it in the manifest and redraw its
+    outputs (:func:`report_only`)."""
+    import json
+
+    from gtsp_bench.bench.engine import configure
+    from gtsp_bench.bench.output_kinds import read_manifest
+    from gtsp_bench.bench.rereference import Tables, rereference
+    from gtsp_bench.bench.rows import read_rows
+    from gtsp_bench.data.io import atomic_write_text
+
+    bench = configure(name, settings)  # type: ignore[arg-type]
+    if bench.planner == "paper":
+        raise InputError("--re-reference: the paper benchmark writes no rows.csv to measure again")
+    out_dir = Path(bench.output_dir)
+    old = read_rows(out_dir / "rows.csv")
+    manifest = read_manifest(out_dir)
+    listed = manifest.get("instances") if isinstance(manifest.get("instances"), dict) else {}
+    tables = Tables([Path(settings.instance_dir), out_dir / "instances"], listed)  # type: ignore[attr-defined]
+    done = rereference(bench, old, tables)
+    for set_name in done.missing:
+        print(f"warning: {set_name}: no such set here; its rows keep their references", file=sys.stderr)
+    text = done.rows.to_csv(index=False, float_format="%.10g")
+    if text == (out_dir / "rows.csv").read_text():
+        print(f"{out_dir / 'rows.csv'}: every row already measured against today's references",
+              file=sys.stderr)
+        return report_only(name, settings)
+    manifest.setdefault("merges", []).append({
+        "command": settings.command,  # type: ignore[attr-defined]
+        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        "re_referenced": done.changed, "renamed": done.renamed})
+    atomic_write_text(out_dir / "rows.csv", text)
+    atomic_write_text(out_dir / "manifest.json", json.dumps(manifest, indent=1) + "\n")
+    print(f"re-referenced {out_dir / 'rows.csv'}: {done.changed} of {len(old)} rows measured "
+          f"against a new reference value, {done.renamed} against the same value of a new kind "
+          "or source", file=sys.stderr)
+    return report_only(name, settings)
+
+
 def check_merge(name: str, settings: object, target: Path) -> None:
     """Refuse a ``--merge-into`` before anything runs: ``target`` must hold a benchmark's rows,
     other than the run's own output folder."""
@@ -229,7 +275,12 @@ def run_bench_command(args: argparse.Namespace, answer: TextIO, argv: Sequence[s
         if args.report_only:
             raise InputError("--merge-into: give it a run to merge, not --report-only")
         check_merge(args.name, settings, target)
-    if args.report_only:
+    if args.re_reference and (args.report_only or target is not None or args.update_reference):
+        raise InputError("--re-reference: give it alone, not with --report-only, --merge-into or "
+                         "--update-reference")
+    if args.re_reference:
+        code, text = re_reference(args.name, settings)
+    elif args.report_only:
         code, text = report_only(args.name, settings)
     else:
         outcome = run_benchmark(args.name, settings)  # type: ignore[arg-type]
