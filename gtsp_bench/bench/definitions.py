@@ -440,6 +440,7 @@ BENCHMARKS: dict[str, Benchmark] = {
             (run("milp"),),
             budget=Budget(3600.0),
             reference=Reference(own_proofs=True),
+            outputs=("doc-exact-frontier",),
             jobs=1,
             rough_time="20 h",
             quick={

@@ -7,7 +7,7 @@ rows alone: ``(benchmark, rows, out_dir, settings, say) -> files written``.
     ``glns.md``: per instance, lns's mean gap, hits and worst run beside GLNS's published numbers
     (``glns-45.csv``), and the three target lines;
 ``doc-heuristics``, ``doc-learned``, ``doc-learned-transfer``, ``doc-exact-scale``,
-``doc-exact-frontier-uav``, ``doc-textbook``
+``doc-exact-frontier``, ``doc-exact-frontier-uav``, ``doc-textbook``
     a generated block of a documentation page (:data:`DOC_BLOCKS`), refreshed only when the run
     wrote into the committed folder ``results/NAME`` of a checkout (``docs/`` beside it);
 ``update-references``
@@ -218,6 +218,45 @@ def exact_scale_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> 
     )
 
 
+def _value(v: float) -> str:
+    return f"{v:,.0f}" if float(v).is_integer() else f"{v:,.2f}"
+
+
+def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
+    """The exact page's GTSPLIB frontier (``exact-frontier``): a line per file of the benchmark
+    and solve; a file without a solve shows its ``best_known.csv`` status. The certified gap is
+    the solve's bound against the better of its tour and the best-known tour."""
+    from gtsp_bench.bench.definitions import Gtsplib
+    from gtsp_bench.bench.sources import gtsplib_references
+
+    refs = [r for src in bench.sources if isinstance(src, Gtsplib) for _, r in gtsplib_references(src)]
+    lines = ["| file | best known | milp | seconds | tour | bound | certified gap |",
+             "|---|---:|---|---:|---:|---:|---:|"]
+    for r in refs:
+        known = _value(r.value) + (" (optimal)" if r.status == "optimal" else "")
+        mine = df[df["instance"] == r.name]
+        if mine.empty:
+            proof = "not run; proven earlier, certificate shipped" if r.certificate else "not run"
+            lines.append(f"| {r.name} | {known} | {proof} | | | | |")
+        for row in mine.itertuples():
+            what = "proven" if row.status == "optimal" else str(row.status).replace("_", " ")
+            upper = min(row.objective, r.value)
+            gap = 100.0 * (upper - row.lower_bound) / upper if math.isfinite(row.lower_bound) else math.nan
+            lines.append(f"| {r.name} | {known} | {what} (seed {row.seed}) | {row.runtime_s:.0f} | "
+                         f"{_value(row.objective)} | {_value(row.lower_bound)} | {gap:.3f} % |")
+    here = set(df.loc[df["status"] == "optimal", "instance"])
+    proven = [r for r in refs if r.name in here or r.status == "optimal"]
+    run = sum(r.name in set(df["instance"]) for r in refs)
+    return (
+        f"{_made_by(bench, df, command)}\n\n{len(proven)} of {len(refs)} files proven optimal "
+        f"({len(here & {r.name for r in refs})} by the solves below); {run} of {len(refs)} "
+        "run.\n\n" + "\n".join(lines) + "\n\n"
+        "Best known: `instances/gtsplib/best_known.csv` (optimal: proven by `milp`, its certificate "
+        "in `instances/gtsplib/proofs/`). Certified gap: the solve's lower bound against the "
+        "better of its own tour and the best-known tour."
+    )
+
+
 def textbook_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The textbook models against milp and dp: a line per K, a column per model."""
     return (
@@ -277,6 +316,7 @@ DOC_BLOCKS: dict[str, tuple[str, str, Callable[..., str]]] = {
     "doc-exact-scale": ("docs/solvers/exact.md", "exact-scale-table", exact_scale_block),
     "doc-exact-frontier-uav": ("docs/solvers/exact.md", "exact-frontier-uav-table",
                                exact_scale_block),
+    "doc-exact-frontier": ("docs/solvers/exact.md", "exact-frontier-table", frontier_block),
     "doc-textbook": ("docs/solvers/exact.md", "textbook-table", textbook_block),
     "doc-glns": ("docs/solvers/heuristics.md", "glns-targets", glns_targets_block),
     "doc-glns-large": ("docs/solvers/heuristics.md", "glns-large-targets", glns_targets_block),

@@ -11,6 +11,7 @@ from gtsp_bench.bench.definitions import BENCHMARKS
 from gtsp_bench.bench.output_kinds import (
     DOC_BLOCKS,
     OUTPUTS,
+    frontier_block,
     glns_lines,
     glns_targets_block,
     new_references,
@@ -116,6 +117,34 @@ def test_a_narrowed_run_leaves_the_docs_table_alone(tmp_path):
     assert doc.read_text() == old and "narrowed by --solvers" in said[0]
     assert write(bench, df, out, Settings(), said.append) == [doc]
     assert "1/1 proven" in doc.read_text()
+
+
+def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour():
+    """exact-frontier's table: a line per file of the benchmark (20, 493-1,084 nodes); a file
+    with a solve shows its bound's gap to the better of its tour and the best-known tour, a
+    file without one its best_known.csv status."""
+    from gtsp_bench.data import gtsplib
+
+    bench = BENCHMARKS["exact-frontier"]
+    known = gtsplib.best_known()
+    u574 = known["115u574"].value
+    df = pd.concat([
+        _rows(instance="115u574", solver="milp", label="milp", status="time_limit", seed=0,
+              objective=u574 + 100, lower_bound=u574 - 0.01 * u574, runtime_s=3600.4),
+        _rows(instance="131p654", solver="milp", label="milp", status="optimal", seed=1,
+              objective=known["131p654"].value, lower_bound=known["131p654"].value, runtime_s=229.5),
+    ])
+    text = frontier_block(bench, df, "cmd")
+    lines = [x for x in text.splitlines() if x.startswith("| ")][1:]
+    assert len(lines) == 20 and {x.split(" | ")[0][2:] for x in lines} >= {"99d493", "217vm1084"}
+    line = next(x for x in lines if x.startswith("| 115u574 |"))
+    assert "| time limit (seed 0) | 3600 |" in line and line.endswith("| 1.000 % |")  # vs best known
+    line = next(x for x in lines if x.startswith("| 131p654 |"))
+    assert "(optimal) | proven (seed 1) | 230 |" in line and line.endswith("| 0.000 % |")
+    line = next(x for x in lines if x.startswith("| 99d493 |"))
+    assert "not run; proven earlier, certificate shipped" in line
+    assert "| not run |" in next(x for x in lines if x.startswith("| 132d657 |"))
+    assert "8 of 20 files proven optimal (1 by the solves below); 2 of 20 run." in text
 
 
 def test_glns_targets_block_counts_files_runs_and_the_worst():
