@@ -119,14 +119,17 @@ class Tables:
         return self._table(path.parent).get((stem, omega)), self._digest(path)
 
 
+def _without(note: str, *drop: str) -> str:
+    return "; ".join(n for n in str(note).split("; ") if n and n not in drop)
+
+
 def _record(row: Any) -> dict[str, Any]:
-    notes = [n for n in str(row.note).split("; ") if n and n not in RULE_NOTES]
     return {
         "status": row.status,
         "objective": None if math.isnan(row.objective) else float(row.objective),
         "lower_bound": None if math.isnan(row.lower_bound) else float(row.lower_bound),
         "runtime_s": None if math.isnan(row.runtime_s) else float(row.runtime_s),
-        "note": "; ".join(notes),
+        "note": _without(row.note, *RULE_NOTES),
         "order": [int(x) for x in str(row.order).split()],
         "heads": [int(x) for x in str(row.heads).split()],
         # the row's times have 4 digits: none may fall past the runtime by rounding
@@ -192,6 +195,8 @@ def rereference(bench: Benchmark, df: pd.DataFrame, tables: Tables) -> Rereferen
         if ref is None or math.isclose(ref.value, float(value), rel_tol=REL_TOL):
             if ref is not None and (ref.kind, ref.source) != (kind, source):  # no number changes
                 g = g.assign(reference_kind=ref.kind, reference_source=ref.source)
+                if ref.kind != "best_found":  # the table caught up with the run's tour
+                    g = g.assign(note=[_without(n, BETTER_THAN_BEST_KNOWN) for n in g["note"]])
                 renamed += len(g)
             parts.append(g)  # its numbers as they were, to the digit
             continue

@@ -119,3 +119,18 @@ def test_rows_of_an_instance_that_cannot_be_found_are_left_alone(tmp_path):
     df = row_frame(set="gone", instance="gone-0", instance_sha256="0" * 64)
     done = rereference(BENCHMARKS["sets"], df, Tables([tmp_path]))
     assert done.missing == ["gone"] and done.rows.equals(df)
+
+
+def test_a_tour_kept_in_the_table_is_no_longer_better_than_the_best_known(tmp_path):
+    """A row that beat the table, whose tour --update-reference kept since: measured against the
+    table's row of the same value, without its note."""
+    from gtsp_bench.bench.rows import BETTER_THAN_BEST_KNOWN
+
+    folder = _set(tmp_path, "mine-0,0.5,110,,best_known,greedy 10s seed 0,2026-12-01\n")
+    row = _row(folder, reference_value=110.0, reference_kind="best_found",
+               reference_source="best of this run, below a guess 1e9", gap_pct=0.0,
+               note=f"warm; {BETTER_THAN_BEST_KNOWN}")
+    done = rereference(BENCHMARKS["sets"], row, Tables([tmp_path]))
+    got = done.rows.iloc[0]
+    assert (got["reference_kind"], got["reference_source"]) == ("best_known", "greedy 10s seed 0 2026-12-01")
+    assert got["note"] == "warm" and (done.changed, done.renamed) == (0, 1)
