@@ -219,6 +219,8 @@ def exact_scale_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> 
 
 
 def _value(v: float) -> str:
+    if not math.isfinite(v):
+        return "-"
     return f"{v:,.0f}" if float(v).is_integer() else f"{v:,.2f}"
 
 
@@ -240,10 +242,11 @@ def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
             lines.append(f"| {r.name} | {known} | {proof} | | | | |")
         for row in mine.itertuples():
             what = "proven" if row.status == "optimal" else str(row.status).replace("_", " ")
-            upper = min(row.objective, r.value)
-            gap = 100.0 * (upper - row.lower_bound) / upper if math.isfinite(row.lower_bound) else math.nan
+            upper = min(row.objective, r.value) if math.isfinite(row.objective) else r.value
+            lb = row.lower_bound
+            gap = f"{100.0 * (upper - lb) / upper:.3f} %" if math.isfinite(lb) else "-"
             lines.append(f"| {r.name} | {known} | {what} (seed {row.seed}) | {row.runtime_s:.0f} | "
-                         f"{_value(row.objective)} | {_value(row.lower_bound)} | {gap:.3f} % |")
+                         f"{_value(row.objective)} | {_value(row.lower_bound)} | {gap} |")
     here = set(df.loc[df["status"] == "optimal", "instance"])
     proven = [r for r in refs if r.name in here or r.status == "optimal"]
     run = sum(r.name in set(df["instance"]) for r in refs)

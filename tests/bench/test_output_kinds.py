@@ -133,6 +133,8 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
               objective=u574 + 100, lower_bound=u574 - 0.01 * u574, runtime_s=3600.4),
         _rows(instance="131p654", solver="milp", label="milp", status="optimal", seed=1,
               objective=known["131p654"].value, lower_bound=known["131p654"].value, runtime_s=229.5),
+        _rows(instance="145u724", solver="milp", label="milp", status="failed", objective=math.nan,
+              runtime_s=12.0),
     ])
     text = frontier_block(bench, df, "cmd")
     lines = [x for x in text.splitlines() if x.startswith("| ")][1:]
@@ -144,7 +146,9 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     line = next(x for x in lines if x.startswith("| 99d493 |"))
     assert "not run; proven earlier, certificate shipped" in line
     assert "| not run |" in next(x for x in lines if x.startswith("| 132d657 |"))
-    assert "8 of 20 files proven optimal (1 by the solves below); 2 of 20 run." in text
+    failed = next(x for x in lines if x.startswith("| 145u724 |"))
+    assert failed.endswith("| failed (seed 0) | 12 | - | - | - |")
+    assert "8 of 20 files proven optimal (1 by the solves below); 3 of 20 run." in text
 
 
 def test_glns_targets_block_counts_files_runs_and_the_worst():
