@@ -245,8 +245,8 @@ def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
             upper = min(row.objective, r.value) if math.isfinite(row.objective) else r.value
             lb = row.lower_bound
             gap = f"{100.0 * (upper - lb) / upper:.3f} %" if math.isfinite(lb) else "-"
-            lines.append(f"| {r.name} | {known} | {what} (seed {row.seed}) | {row.runtime_s:.0f} | "
-                         f"{_value(row.objective)} | {_value(row.lower_bound)} | {gap} |")
+            lines.append(f"| {r.name} | {known} | {what} ({row.label}, seed {row.seed}) | "
+                         f"{row.runtime_s:.0f} | {_value(row.objective)} | {_value(lb)} | {gap} |")
     here = set(df.loc[df["status"] == "optimal", "instance"])
     proven = [r for r in refs if r.name in here or r.status == "optimal"]
     run = sum(r.name in set(df["instance"]) for r in refs)

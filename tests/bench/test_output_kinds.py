@@ -140,14 +140,14 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     lines = [x for x in text.splitlines() if x.startswith("| ")][1:]
     assert len(lines) == 20 and {x.split(" | ")[0][2:] for x in lines} >= {"99d493", "217vm1084"}
     line = next(x for x in lines if x.startswith("| 115u574 |"))
-    assert "| time limit (seed 0) | 3600 |" in line and line.endswith("| 1.000 % |")  # vs best known
+    assert "| time limit (milp, seed 0) | 3600 |" in line and line.endswith("| 1.000 % |")  # vs best known
     line = next(x for x in lines if x.startswith("| 131p654 |"))
-    assert "(optimal) | proven (seed 1) | 230 |" in line and line.endswith("| 0.000 % |")
+    assert "(optimal) | proven (milp, seed 1) | 230 |" in line and line.endswith("| 0.000 % |")
     line = next(x for x in lines if x.startswith("| 99d493 |"))
     assert "not run; proven earlier, certificate shipped" in line
     assert "| not run |" in next(x for x in lines if x.startswith("| 132d657 |"))
     failed = next(x for x in lines if x.startswith("| 145u724 |"))
-    assert failed.endswith("| failed (seed 0) | 12 | - | - | - |")
+    assert failed.endswith("| failed (milp, seed 0) | 12 | - | - | - |")
     assert "8 of 20 files proven optimal (1 by the solves below); 3 of 20 run." in text
 
 
