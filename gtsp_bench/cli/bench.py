@@ -62,7 +62,8 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                    help="solver option for every run (repeatable, as solve's -p; over a run's own "
                         "value, and named in its label: -s lns -p effort=fast gives 'lns "
                         "effort=fast'); -p initial=best-known starts each GTSPLIB solve from "
-                        "its best-known tour (solvers that take an initial solution: lns)")
+                        "its best-known tour (solvers that take an initial solution: lns, milp, "
+                        "lkh, ortools, greedy+ls, gurobi)")
     g.add_argument("--clusters", "-K", metavar="K",
                    help="cluster counts to keep: a range 4..10, a list 4,7,10 or a mix 4..7,10")
     g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",
@@ -101,7 +102,7 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                         "(the sets' reference.csv, GTSPLIB's best_known.csv) by the benchmark's "
                         "reference rule, rewrite its reference and gap columns, then redraw as "
                         "--report-only does (a reference proven by the run is kept; "
-                        "DIR/manifest.json records the command)")
+                        "OUT/manifest.json records the command)")
     g.add_argument("--merge-into", metavar="DIR",
                    help="after a run without failures, put its rows in place of the same solves' "
                         "(set, instance, omega, label, seed) in DIR/rows.csv, add the others, and "
