@@ -185,7 +185,7 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
     from gtsp_bench.bench.engine import configure
     from gtsp_bench.bench.output_kinds import read_manifest
     from gtsp_bench.bench.rereference import Tables, rereference
-    from gtsp_bench.bench.rows import read_rows
+    from gtsp_bench.bench.rows import read_rows, summary_markdown, summary_table
     from gtsp_bench.data.io import atomic_write_text
 
     bench = configure(name, settings)  # type: ignore[arg-type]
@@ -200,14 +200,18 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
     for set_name in done.missing:
         print(f"warning: {set_name}: no such set here; its rows keep their references", file=sys.stderr)
     text = done.rows.to_csv(index=False, float_format="%.10g")
-    if text == (out_dir / "rows.csv").read_text():
+    if text == (out_dir / "rows.csv").read_text():  # nothing to write or redraw
         print(f"{out_dir / 'rows.csv'}: every row already measured against today's references",
               file=sys.stderr)
-        return report_only(name, settings)
-    manifest.setdefault("merges", []).append({
-        "command": settings.command,  # type: ignore[attr-defined]
-        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-        "re_referenced": done.changed, "renamed": done.renamed})
+        return 0, summary_markdown(summary_table(old))
+    merges = manifest.setdefault("merges", [])
+    command = settings.command  # type: ignore[attr-defined]
+    if not (merges and merges[-1].get("command") == command and "re_referenced" in merges[-1]):
+        merges.append({"command": command, "re_referenced": 0, "renamed": 0})
+    last = merges[-1]  # the same command again: one entry, the counts added up
+    last.update(date=dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+                re_referenced=last["re_referenced"] + done.changed,
+                renamed=last["renamed"] + done.renamed)
     atomic_write_text(out_dir / "rows.csv", text)
     atomic_write_text(out_dir / "manifest.json", json.dumps(manifest, indent=1) + "\n")
     print(f"re-referenced {out_dir / 'rows.csv'}: {done.changed} of {len(old)} rows measured "
