@@ -182,7 +182,11 @@ def rereference(bench: Benchmark, df: pd.DataFrame, tables: Tables) -> Rereferen
             key = f"row{i}"
             limit = None if math.isnan(row.time_limit) else float(row.time_limit)
             cells.append(Cell(entry, Run(row.solver, label=row.label), omega, int(row.seed), limit, key))  # type: ignore[arg-type]
-            records[key] = _record(row)
+            try:
+                records[key] = _record(row)
+            except ValueError as e:
+                raise InputError(f"{set_name}/{stem}: a row's tour or trajectory is malformed "
+                                 f"({e})") from None
         exact: dict[tuple[str, str, float | None], tuple[str, str]] = {}
         kind, value, source = first["reference_kind"], first["reference_value"], first["reference_source"]
         if (kind == "optimal" and str(source).endswith("(proven)")) or kind == "best_found":

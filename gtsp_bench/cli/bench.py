@@ -196,7 +196,10 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
     manifest = read_manifest(out_dir)
     listed = manifest.get("instances") if isinstance(manifest.get("instances"), dict) else {}
     tables = Tables([Path(settings.instance_dir), out_dir / "instances"], listed)  # type: ignore[attr-defined]
-    done = rereference(bench, old, tables)
+    try:
+        done = rereference(bench, old, tables)
+    except InputError as e:
+        raise InputError(f"{out_dir / 'rows.csv'}: {e}") from None
     for set_name in done.missing:
         print(f"warning: {set_name}: no such set here; its rows keep their references", file=sys.stderr)
     text = done.rows.to_csv(index=False, float_format="%.10g")

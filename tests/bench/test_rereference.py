@@ -81,6 +81,19 @@ def test_a_changed_instance_is_refused_and_nothing_is_written(tmp_path, capsys):
     assert (tmp_path / "out" / "rows.csv").read_text() == text
 
 
+def test_a_malformed_row_is_one_line_naming_the_rows_file(tmp_path, capsys):
+    """A trajectory that is not numbers: exit 2, the rows file and the point named, no traceback."""
+    folder = _set(tmp_path)
+    assert _run(tmp_path, capsys, folder)[0] == 0
+    rows = tmp_path / "out" / "rows.csv"
+    df = pd.read_csv(rows)
+    df.loc[0, "trajectory"] = "soon:never"
+    df.to_csv(rows, index=False)
+    code, said = _run(tmp_path, capsys, folder, "--re-reference")
+    assert code == 2 and said.err.count("\n") == 1, said.err
+    assert f"{rows}: mine/mine-0: a row's tour or trajectory is malformed" in said.err
+
+
 @pytest.mark.parametrize("more", [["--report-only"], ["--update-reference"]])
 def test_re_reference_goes_alone(tmp_path, capsys, more):
     """--re-reference with another way of writing the outputs: one line, exit 2."""
