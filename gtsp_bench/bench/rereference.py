@@ -138,6 +138,18 @@ def _record(row: Any) -> dict[str, Any]:
     }
 
 
+def _cells(g: pd.DataFrame, entry: RowEntry, omega: float | None,
+           ) -> tuple[RowEntry, list[Cell], dict[str, dict[str, Any]]]:
+    """The cells and records of one point's rows, keyed by their row index."""
+    cells, records = [], {}
+    for i, row in zip(g.index, g.itertuples(), strict=True):
+        key = f"row{i}"
+        limit = None if math.isnan(row.time_limit) else float(row.time_limit)
+        cells.append(Cell(entry, Run(row.solver, label=row.label), omega, int(row.seed), limit, key))  # type: ignore[arg-type]
+        records[key] = _record(row)
+    return entry, cells, records
+
+
 @dataclass(frozen=True)
 class Rereferenced:
     """What :func:`rereference` made: the ``rows`` (in their order), how many were measured
@@ -175,18 +187,12 @@ def rereference(bench: Benchmark, df: pd.DataFrame, tables: Tables) -> Rereferen
         if any(sha != digest for sha in g["instance_sha256"]):
             raise InputError(f"{set_name}/{stem}: the instance file changed since the run "
                              "(instance_sha256 differs); rerun it instead")
-        entry = RowEntry(str(set_name), str(stem), digest, int(first["K"]), int(first["N"]),
-                         {omega: table_row} if table_row is not None else {})
-        cells, records = [], {}
-        for i, row in zip(g.index, g.itertuples(), strict=True):
-            key = f"row{i}"
-            limit = None if math.isnan(row.time_limit) else float(row.time_limit)
-            cells.append(Cell(entry, Run(row.solver, label=row.label), omega, int(row.seed), limit, key))  # type: ignore[arg-type]
-            try:
-                records[key] = _record(row)
-            except ValueError as e:
-                raise InputError(f"{set_name}/{stem}: a row's tour or trajectory is malformed "
-                                 f"({e})") from None
+        try:
+            entry, cells, records = _cells(g, RowEntry(
+                str(set_name), str(stem), digest, int(first["K"]), int(first["N"]),
+                {omega: table_row} if table_row is not None else {}), omega)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{set_name}/{stem}: a row is malformed ({e})") from None
         exact: dict[tuple[str, str, float | None], tuple[str, str]] = {}
         kind, value, source = first["reference_kind"], first["reference_value"], first["reference_source"]
         if (kind == "optimal" and str(source).endswith("(proven)")) or kind == "best_found":

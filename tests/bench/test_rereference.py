@@ -91,7 +91,7 @@ def test_a_malformed_row_is_one_line_naming_the_rows_file(tmp_path, capsys):
     df.to_csv(rows, index=False)
     code, said = _run(tmp_path, capsys, folder, "--re-reference")
     assert code == 2 and said.err.count("\n") == 1, said.err
-    assert f"{rows}: mine/mine-0: a row's tour or trajectory is malformed" in said.err
+    assert f"{rows}: mine/mine-0: a row is malformed" in said.err
 
 
 @pytest.mark.parametrize("more", [["--report-only"], ["--update-reference"]])
