@@ -565,7 +565,8 @@ class _Search:
 
         Candidates: the fractional ``y`` (else ``x``) closest to 1/2, scored by the product of
         the two children's gains (:func:`~gtsp_bench.solvers.exact.mip.branching.choose`): all
-        strong-branched while strong-branching LPs mostly finish, else reliability branching.
+        strong-branched while strong-branching LPs mostly finish, else reliability branching
+        (the option ``branching`` may fix either).
         """
         self.strong_proofs.clear()
         is_y = self.lp.cols < self.model.n_nodes
@@ -576,7 +577,9 @@ class _Search:
                 break
         else:
             raise AssertionError("no fractional column to branch on")
-        full = not branching.reliability(*(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial")))
+        mode = self.options.branching
+        full = mode == "strong" or (mode == "auto" and not branching.reliability(
+            *(self.stats.get(k, 0) for k in ("strong_lps", "strong_partial"))))
         if full:  # full strong branching of the closest few (reliability branching takes them all)
             cand = cand[np.argsort(np.abs(values[cand] - 0.5), kind="stable")[:branching.CANDIDATES]]
         if len(cand) == 1:

@@ -11,7 +11,7 @@ from gtsp_bench.solvers.heuristics.greedy import greedy_tour
 from gtsp_bench.solvers.heuristics.lns import Lns
 from gtsp_bench.solvers.heuristics.local_search import anchor_node, improve
 
-from gtsp_bench.checks import check_bool, check_float, check_int
+from gtsp_bench.checks import check_bool, check_choice, check_float, check_int
 from gtsp_bench.errors import InputError
 from gtsp_bench.problem import Problem
 from gtsp_bench.solver import Progress, allowed_threads, no_progress
@@ -20,6 +20,8 @@ from gtsp_bench.solver import Progress, allowed_threads, no_progress
 #: ran 11-20 % more root rounds in the same time at UAV K = 100 and 200, its certified gap lower at
 #: every point measured; more threads were not measured).
 LP_THREADS = 2
+#: Values of :attr:`MipOptions.branching`.
+BRANCHINGS = ("auto", "strong", "reliability")
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,12 @@ class MipOptions:
         (HiGHS's parallel dual simplex, Gurobi's ``Threads``); smaller models solve on one.
         ``None``: :data:`LP_THREADS` where the cores allow
         (:func:`gtsp_bench.solver.allowed_threads`: in a benchmark, the cores over its workers).
+    branching
+        How the branch and cut picks its column (:mod:`~gtsp_bench.solvers.exact.mip.branching`):
+        ``"strong"`` strong-branches the 8 fractional columns closest to 1/2 at every node,
+        ``"reliability"`` strong-branches only columns whose pseudo-costs are not yet trusted,
+        ``"auto"`` (default) the first until half of the strong LPs stop at their iteration
+        limit, then the second.
     """
 
     prune: bool = True
@@ -60,6 +68,7 @@ class MipOptions:
     verbose: bool = False
     certificate: str | None = None
     threads: int | None = None
+    branching: str = "auto"
 
     def __post_init__(self) -> None:
         for name in ("prune", "verbose"):
@@ -71,6 +80,7 @@ class MipOptions:
             raise InputError("certificate must be a file path")
         if self.threads is not None:
             check_int("threads", self.threads, 1)
+        check_choice("branching", self.branching, BRANCHINGS)
 
     def lp_threads(self) -> int:
         """Threads of a big model's LPs: ``threads``, else :data:`LP_THREADS` where allowed."""

@@ -206,15 +206,19 @@ class MipSolver:
     threads
         LP threads on a model of at least 1,200 nodes (UAV K = 100 and up; ``None``: 2 where
         the cores allow, see :class:`~gtsp_bench.solvers.exact.mip.options.MipOptions`).
+    branching
+        ``"auto"``, ``"strong"`` or ``"reliability"``: how the branch and cut picks its column
+        (see :class:`~gtsp_bench.solvers.exact.mip.options.MipOptions`).
     """
 
     def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False,
-                 certificate: str | None = None, threads: int | None = None) -> None:
+                 certificate: str | None = None, threads: int | None = None,
+                 branching: str = "auto") -> None:
         self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
                                   core_edges=core_edges, abs_gap=abs_gap, verbose=verbose,
                                   certificate=None if certificate is None else str(certificate),
-                                  threads=threads)
+                                  threads=threads, branching=branching)
         # compiled or loaded here (a worker's start-up), not in a solve's clock
         flow.warm_up()
         prune_warm_up()

@@ -124,6 +124,21 @@ def test_branch_and_cut_with_either_branching_proves_the_dp_optimum(share, seed,
     assert r.stats["bc_nodes"] >= 1
 
 
+def test_the_branching_option_fixes_the_rule_and_each_proves_the_dp_optimum():
+    """A K = 16 instance that branches: "strong" strong-branches every close candidate at every
+    node (as "auto" does while strong LPs finish), "reliability" trusts pseudo-costs from the
+    first node on and so solves fewer strong LPs; each proves the dp optimum."""
+    inst = generate_instance(16, 6, seed=8)
+    best = run_solver("dp", inst, 0.5).objective
+    got = {}
+    for mode in ("auto", "strong", "reliability"):
+        r = solve_exact(price(inst, 0.5), HighsBackend,
+                        MipOptions(root_rounds=2, lns_trials=0, branching=mode))
+        assert r.status == "optimal" and r.objective == pytest.approx(best, rel=1e-9), mode
+        got[mode] = r.stats["strong_lps"]
+    assert got["strong"] == got["auto"] > got["reliability"] > 0
+
+
 def test_reliability_needs_two_nodes_of_mostly_stopped_strong_lps():
     assert not branching.reliability(0, 0)
     assert not branching.reliability(2 * branching.CANDIDATES - 1, 2 * branching.CANDIDATES - 1)

@@ -29,6 +29,7 @@ from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
     ({"abs_gap": -1.0}, "abs_gap must be a number"),
     ({"threads": 0}, "threads must be an integer >= 1"),
     ({"threads": 2.0}, "threads must be an integer >= 1"),
+    ({"branching": "best"}, "branching must be one of 'auto', 'strong', 'reliability'"),
 ])
 def test_options_are_validated(bad, message):
     """Bad option values raise InputError naming the option."""
