@@ -61,10 +61,6 @@ class RowEntry:
     references: Mapping[float | None, ReferenceRow] = field(default_factory=dict)
 
 
-def _omega(value: Any) -> float | None:
-    return None if value is None or (isinstance(value, float) and math.isnan(value)) else float(value)
-
-
 class Tables:
     """Today's reference rows of the instances a run's rows name, each table read once.
 
