@@ -36,10 +36,9 @@ from gtsp_bench.bench.rows import (
     make_rows,
     references,
 )
-from gtsp_bench.bench.sources import gtsplib_reference_row
 from gtsp_bench.data import gtsplib
 from gtsp_bench.data.io import GZIP_SUFFIX, INSTANCE_SUFFIXES, instance_stem, read_text
-from gtsp_bench.data.sets import REFERENCE_FILE, ReferenceRow, read_reference
+from gtsp_bench.data.sets import ReferenceRow, resolve_set
 from gtsp_bench.errors import InputError
 
 #: Reference values this close (relative) are the same: a row keeps 10 significant digits.
@@ -77,14 +76,8 @@ class Tables:
         self._digests: dict[Path, str] = {}
 
     def _table(self, folder: Path) -> Mapping[tuple[str, float | None], ReferenceRow]:
-        if folder not in self._tables:
-            rows: Mapping[tuple[str, float | None], ReferenceRow] = {}
-            if (folder / REFERENCE_FILE).is_file():
-                rows = read_reference(folder / REFERENCE_FILE)
-            elif (folder / "best_known.csv").is_file():
-                rows = {(r.name, None): gtsplib_reference_row(r)
-                        for r in gtsplib.read_best_known(folder).values()}
-            self._tables[folder] = rows
+        if folder not in self._tables:  # its reference.csv, or a GTSPLIB folder's best_known.csv
+            self._tables[folder] = resolve_set(str(folder)).references
         return self._tables[folder]
 
     def _digest(self, path: Path) -> str:

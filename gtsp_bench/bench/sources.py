@@ -20,7 +20,14 @@ from typing import TYPE_CHECKING
 
 from gtsp_bench.bench.definitions import Committed, Generated, Gtsplib, Source
 from gtsp_bench.bench.tasks import StoredInstance, fingerprint
-from gtsp_bench.data.sets import ReferenceRow, SetFile, read_reference, read_set_file, resolve_set
+from gtsp_bench.data.sets import (
+    ReferenceRow,
+    SetFile,
+    gtsplib_reference_row,
+    read_reference,
+    read_set_file,
+    resolve_set,
+)
 from gtsp_bench.errors import InputError
 
 if TYPE_CHECKING:
@@ -194,12 +201,6 @@ def _gtsplib(src: Gtsplib) -> list[Entry]:
         out.append(Entry(label, r.name, StoredInstance(inst, text, digest, path),
                          {None: gtsplib_reference_row(r)}, glns.get(r.name)))
     return out
-
-
-def gtsplib_reference_row(r: Reference) -> ReferenceRow:
-    """A GTSPLIB file's ``best_known.csv`` row as the reference a solve of it is measured
-    against (distance-only: omega ``None``)."""
-    return ReferenceRow(r.name, None, r.value, None, r.status, r.reference_source, r.date)
 
 
 def best_known_tour(e: Entry) -> tuple[tuple[tuple[int, ...], tuple[int, ...]], str]:

@@ -37,12 +37,16 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gtsp_bench.bench.tasks import fingerprint
 from gtsp_bench.checks import strictly_better
 from gtsp_bench.data.io import INSTANCE_SUFFIXES, atomic_write_text, format_suffix, instance_stem, read_text
 from gtsp_bench.data.parse import parse_instance_text
 from gtsp_bench.errors import InputError
+
+if TYPE_CHECKING:
+    from gtsp_bench.data.gtsplib import Reference
 
 #: File name of a set's reference values.
 REFERENCE_FILE = "reference.csv"
@@ -233,6 +237,12 @@ def committed_sets(instance_dir: Path) -> list[str]:
     return sorted(names)
 
 
+def gtsplib_reference_row(r: Reference) -> ReferenceRow:
+    """A GTSPLIB file's ``best_known.csv`` row as the reference a solve of it is measured
+    against (distance-only: omega ``None``)."""
+    return ReferenceRow(r.name, None, r.value, None, r.status, r.reference_source, r.date)
+
+
 def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
     from gtsp_bench.data import gtsplib
 
@@ -247,7 +257,7 @@ def _gtsplib_set(where: Path | None, name: str) -> InstanceSet:
     files, refs = [], {}
     for r in table.values():  # AGTSP files too: symmetric-only solvers refuse them
         files.append(SetFile(where / f"{r.name}.gtsp.gz", r.name, r.clusters, r.nodes))
-        refs[(r.name, None)] = ReferenceRow(r.name, None, r.value, None, r.status, r.reference_source, r.date)
+        refs[(r.name, None)] = gtsplib_reference_row(r)
     return InstanceSet(name, where, tuple(files), refs, None)
 
 
