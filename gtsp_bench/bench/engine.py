@@ -12,6 +12,7 @@ of it, turns records into rows (:mod:`gtsp_bench.bench.rows`) and writes the out
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import time
@@ -97,6 +98,12 @@ _NARROWING = {"--solvers": "solvers", "-K": "ks", "--set": "sets", "--names": "n
 #: library's best-known tour (:func:`gtsp_bench.bench.sources.best_known_tour`); the engine
 #: resolves it, the solver gets the tour as its ``initial`` solution.
 WARM_START, BEST_KNOWN = "initial", "best-known"
+#: The solver option (``-p certificate=true``) that has each solve that proves optimality write
+#: its proof certificate into the output folder's ``proofs/`` (:func:`certificate_path`); the
+#: worker checks it with the package's checker and the row's note says what the check found.
+CERTIFICATE = "certificate"
+#: Where a benchmark's certificates go, in its output folder.
+PROOFS_DIR = "proofs"
 
 
 def _with_instances(src: Any, n: int) -> Any:
@@ -105,6 +112,14 @@ def _with_instances(src: Any, n: int) -> Any:
     if isinstance(src, Gtsplib) and src.per_group is not None:
         return replace(src, per_group=n)
     return src
+
+
+def certificate_path(out_dir: str | Path, instance: str, key: str) -> Path:
+    """Where the solve of task ``key`` on ``instance`` writes its proof certificate
+    (``-p certificate=true``): ``OUT/proofs/<instance>.<key digest>.cert.json.gz``, an absolute
+    path (the worker writes it)."""
+    digest = hashlib.sha256(key.encode()).hexdigest()[:10]
+    return Path(out_dir).resolve() / PROOFS_DIR / f"{instance}.{digest}.cert.json.gz"
 
 
 def _select_runs(bench: Benchmark, given: Sequence[str]) -> tuple[Run, ...]:
@@ -190,6 +205,11 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
     if warm is not None and warm != BEST_KNOWN:
         raise InputError(f"--param {WARM_START}={warm}: the one warm start of a benchmark is "
                          f"{WARM_START}={BEST_KNOWN} (the library's best-known tour of each GTSPLIB file)")
+    certify = given.pop(CERTIFICATE, None)
+    if certify is not None and certify is not True:
+        raise InputError(f"--param {CERTIFICATE}={_option_text(certify)}: in a benchmark it is "
+                         f"{CERTIFICATE}=true (each proof's certificate is written to the output "
+                         f"folder's {PROOFS_DIR}/ and checked)")
     used: set[str] = set()
     out = []
     for r in runs:
@@ -197,6 +217,8 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
         mine = {k: v for k, v in given.items() if takes is None or k in takes}
         if warm is not None and can_warm_start(r.solver):
             mine[WARM_START] = warm
+        if certify and takes is not None and CERTIFICATE in takes:
+            mine[CERTIFICATE] = True
         used.update(mine)
         if not mine:
             out.append(r)
@@ -207,6 +229,9 @@ def with_params(runs: Sequence[Run], params: Sequence[tuple[str, Any]]) -> tuple
     # an option no run takes: the first run's solver does not take it either (one line, its
     # options listed)
     check_option_names(runs[0].solver, [k for k in given if k not in used])
+    if certify and CERTIFICATE not in used:
+        raise InputError(f"--param {CERTIFICATE}=true: no solver of the run writes proof certificates "
+                         f"(solvers: {', '.join(sorted({r.solver for r in runs}))})")
     if warm is not None and WARM_START not in used:
         raise InputError(f"--param {WARM_START}={warm}: no solver of the run can start from a tour "
                          f"(solvers: {', '.join(sorted({r.solver for r in runs}))})")
@@ -283,11 +308,17 @@ def plan(bench: Benchmark, settings: Settings) -> Plan:
             if e.stem not in tours:
                 tours[e.stem] = best_known_tour(e)
             initial, tour_file = tours[e.stem]
-            options = tuple(sorted(mine.items()))
             # the key names the tour file, so a shorter tour kept since starts new solves
-            keyed = (*options, (WARM_START, tour_file))
+            keyed = (*tuple(sorted(mine.items())), (WARM_START, tour_file))
+        # the key keeps certificate=True (a search that logs its proof is another search); the
+        # worker gets the file to write
+        certify = mine.pop(CERTIFICATE, None) is True
+        options = tuple(sorted(mine.items()))
         key = task_key(e.stored, solver, run_w, seed, tl, keyed)
-        tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options, initial))
+        certificate = None
+        if certify:
+            certificate = str(certificate_path(bench.output_dir, e.stored.instance.name, key))
+        tasks.setdefault(key, Task(key, solver, run_w, e.stored, seed, tl, options, initial, certificate))
         return key
 
     for e in entries:
@@ -315,8 +346,10 @@ def batches(bench: Benchmark, p: Plan, todo: Sequence[Task]) -> list[Task | Batc
     wanted = {t.key for t in todo}
     groups: dict[tuple[Any, ...], list[Task]] = {}
     for c in p.cells:
-        if c.key in wanted and p.tasks[c.key].initial is None:  # a warm start is solved alone
-            groups.setdefault((c.entry.set, c.entry.k, c.run, c.omega, c.seed), []).append(p.tasks[c.key])
+        t = p.tasks.get(c.key)
+        if t is not None and c.key in wanted and t.initial is None and t.certificate is None:
+            # a warm start or a certified solve is solved alone
+            groups.setdefault((c.entry.set, c.entry.k, c.run, c.omega, c.seed), []).append(t)
     grouped = {t.key for g in groups.values() for t in g}
     jobs: list[Task | BatchTask] = [t for t in todo if t.key not in grouped]
     for members in groups.values():
@@ -380,6 +413,7 @@ def run_benchmark(name: str, settings: Settings, *, say: Callable[[str], None] =
         finally:
             close_executors()
         outputs.write_all(bench, settings, p, outcome, say)
+        _say_certificates(p, outcome, out_dir, say)
     outcome.wall_s = time.perf_counter() - t0
     say(
         f"done in {outcome.wall_s:.1f} s: {outcome.run} solves run, {outcome.cached} re-used, "
@@ -390,12 +424,30 @@ def run_benchmark(name: str, settings: Settings, *, say: Callable[[str], None] =
     return outcome
 
 
+def _say_certificates(p: Plan, outcome: Outcome, out_dir: Path, say: Callable[[str], None]) -> None:
+    """One line on the certificates of a ``-p certificate=true`` run; a certificate the checker
+    refused, or a proof that wrote none, is an error of the run (exit code 1)."""
+    from gtsp_bench.bench.pool import CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE
+
+    notes = [str(outcome.records.get(k, {}).get("note") or "") for k, t in p.tasks.items() if t.certificate]
+    if not notes:
+        return
+    checked = sum(n.startswith(CERTIFICATE_CHECKED) for n in notes)
+    bad = [n for n in notes if n.startswith((CERTIFICATE_FAILS, NO_CERTIFICATE))]
+    say(f"certificates: {checked} written to {out_dir / PROOFS_DIR} and checked, {len(bad)} not; "
+        f"{len(notes) - checked - len(bad)} solve(s) proved nothing")
+    outcome.errors += bad
+
+
 __all__ = [
+    "CERTIFICATE",
     "DISTANCE_OMEGA",
+    "PROOFS_DIR",
     "Outcome",
     "Plan",
     "Settings",
     "batches",
+    "certificate_path",
     "configure",
     "default_runs",
     "execute",

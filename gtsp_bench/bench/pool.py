@@ -40,6 +40,7 @@ from collections import deque
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
+from pathlib import Path
 from typing import Any
 
 from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
@@ -52,6 +53,10 @@ THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
 MAX_ATTEMPTS = 3
 #: Cause of a failure outside the solver's control (see :data:`gtsp_bench.checks.FAILURE_CAUSES`).
 INFRASTRUCTURE = "infrastructure"
+#: How a row's note begins when its solve wrote a proof certificate (``-p certificate=true``):
+#: the package's checker confirmed it, refused it, or the solve proved nothing to write.
+CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE = (
+    "certificate checked", "certificate fails", "no certificate")
 
 
 def failure(note: str, status: str = "failed", cause: str = "solver") -> dict[str, Any]:
@@ -98,11 +103,17 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
     from gtsp_bench.registry import get_solver, run_solver, run_solver_batch
 
     start = time.perf_counter()
+    certificate = msg.get("certificate")
     try:
-        if msg.get("options"):
-            built = "solver:" + json.dumps(msg["options"], sort_keys=True)
+        options = dict(msg.get("options") or {})
+        if certificate is not None:
+            options["certificate"] = certificate
+            Path(certificate).parent.mkdir(parents=True, exist_ok=True)
+            Path(certificate).unlink(missing_ok=True)  # an earlier attempt's proof is not this one's
+        if options:
+            built = "solver:" + json.dumps(options, sort_keys=True)
             if built not in cache:
-                cache[built] = get_solver(name, **msg["options"])
+                cache[built] = get_solver(name, **options)
             solver = cache[built]
         def parsed(item: Mapping[str, Any]) -> Any:
             inst = cache.get(item["fingerprint"])
@@ -122,6 +133,8 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
                              seed=msg["seed"], name=name,
                              initial=None if start_from is None else tuple(start_from))
             out = _record(res)
+            if certificate is not None:
+                out["note"] = check_written_certificate(parsed(msg), certificate, res)
     except InputError as e:  # the solver declines this input by design
         out = failure(one_line(e), "refused")
     except MemoryError as e:
@@ -130,6 +143,30 @@ def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[st
         out = failure(one_line(e))
     out["task_wall_s"] = time.perf_counter() - start
     return out
+
+
+def check_written_certificate(instance: Any, path: str, res: Any) -> str:
+    """Check the certificate that the solve ``res`` wrote at ``path`` with the package's checker
+    (:func:`gtsp_bench.proof.check_certificate`, exact arithmetic); a row's note: ``certificate
+    checked: proven optimal: VALUE (FILE)``, ``certificate fails: REASON (FILE)``, ``no
+    certificate: WHY`` (a solve that says it proved optimality but wrote none), or nothing (a
+    solve that proved nothing)."""
+    from gtsp_bench.errors import InputError
+    from gtsp_bench.proof import ProofError, check_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    if not Path(path).exists():
+        if res.status != "optimal":
+            return ""
+        return f"{NO_CERTIFICATE}: {res.stats.get('certificate', 'none written')}"
+    name = f"{Path(path).parent.name}/{Path(path).name}"  # as the output folder holds it
+    try:
+        result = check_certificate(instance, read_certificate(path))
+    except (InputError, ProofError) as e:
+        return f"{CERTIFICATE_FAILS}: {one_line(e)} ({name})"
+    if not result.proven:
+        return f"{CERTIFICATE_FAILS}: {result.summary()} ({name})"
+    return f"{CERTIFICATE_CHECKED}: {result.summary()} ({name})"
 
 
 def _record(res: Any) -> dict[str, Any]:

@@ -94,7 +94,8 @@ class StoredInstance:
 class Task:
     """One solve; ``key`` identifies it in the task log; ``options`` are the solver's keyword
     options (none: its defaults); ``initial``, a warm start's ``(order, heads)`` (none: the
-    solver's own first tour)."""
+    solver's own first tour); ``certificate``, the file a proof's certificate is written to and
+    checked at (none: no certificate)."""
 
     key: str
     solver: str
@@ -104,6 +105,7 @@ class Task:
     time_limit: float
     options: tuple[tuple[str, Any], ...] = ()
     initial: tuple[tuple[int, ...], tuple[int, ...]] | None = None
+    certificate: str | None = None
 
 
 @dataclass(frozen=True)
@@ -179,6 +181,8 @@ def _task_message(t: Task | BatchTask) -> dict[str, Any]:
         msg["hard_limit"] = hard_limit_for(t.time_limit)
         if t.initial is not None:
             msg["initial"] = [list(t.initial[0]), list(t.initial[1])]
+        if t.certificate is not None:
+            msg["certificate"] = t.certificate
     if first.options:
         msg["options"] = dict(first.options)
     return msg

@@ -63,7 +63,8 @@ def add_bench_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
                         "value, and named in its label: -s lns -p effort=fast gives 'lns "
                         "effort=fast'); -p initial=best-known starts each GTSPLIB solve from "
                         "its best-known tour (solvers that take an initial solution: lns, milp, "
-                        "lkh, ortools, greedy+ls, gurobi)")
+                        "lkh, ortools, greedy+ls, gurobi); -p certificate=true has each proof of "
+                        "milp write its certificate to OUT/proofs/ and checks it")
     g.add_argument("--clusters", "-K", metavar="K",
                    help="cluster counts to keep: a range 4..10, a list 4,7,10 or a mix 4..7,10")
     g.add_argument("--set", dest="sets", action="append", default=None, metavar="NAME|PATH",

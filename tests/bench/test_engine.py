@@ -438,6 +438,44 @@ def test_initial_best_known_starts_each_gtsplib_solve_from_the_librarys_tour(tmp
     assert not (tmp_path / "bad").exists()
 
 
+def test_certificate_true_writes_and_checks_each_proof(tmp_path, capsys):
+    """-p certificate=true: each proof's certificate lands in OUT/proofs/, the worker's check
+    is the row's note (and ``check-proof`` agrees), the label says so and the key keeps it (a
+    certifying search is another search); another value and a run whose solvers write no
+    certificate are one error line each, exit code 2, nothing written."""
+    from gtsp_bench.bench.engine import certificate_path
+
+    out = tmp_path / "out"
+    argv = ["bench", "sets", "--set", "gtsplib", "--names", "3burma14,11berlin52", "--solvers", "milp",
+            "-p", "certificate=true", "--out", str(out), "--jobs", "1", "--no-progress"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert f"certificates: 2 written to {out.resolve() / 'proofs'} and checked, 0 not" in err
+    rows = pd.read_csv(out / "rows.csv").set_index("instance")
+    records = [json.loads(line) for line in (out / "tmp" / "runs.jsonl").read_text().splitlines()]
+    assert all("|milp[certificate=True]|" in r["key"] for r in records)
+    for r in records:
+        name, path = r["instance"], certificate_path(out, r["instance"], r["key"])
+        value = int(rows.loc[name, "objective"])
+        assert rows.loc[name, "label"] == "milp certificate=true" and rows.loc[name, "status"] == "optimal"
+        assert rows.loc[name, "note"] == f"certificate checked: proven optimal: {value} (proofs/{path.name})"
+        assert main(["check-proof", str(REPO / "instances" / "gtsplib" / f"{name}.gtsp.gz"), str(path)]) == 0
+        assert capsys.readouterr().out == f"proven optimal: {value}\n"
+    assert sorted(p.name for p in (out / "proofs").iterdir()) == sorted(
+        certificate_path(out, r["instance"], r["key"]).name for r in records)
+    for bad, says in (
+        (["--solvers", "milp", "-p", "certificate=c.gz"],
+         "--param certificate=c.gz: in a benchmark it is certificate=true"),
+        (["--solvers", "greedy", "-p", "certificate=true"],
+         "--param certificate=true: no solver of the run writes proof certificates (solvers: greedy)"),
+    ):
+        assert main(["bench", "sets", "--set", "gtsplib", "--names", "3burma14", *bad,
+                     "--out", str(tmp_path / "bad"), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and says in err, err
+    assert not (tmp_path / "bad").exists()
+
+
 def test_a_gtsplib_tour_below_the_best_known_is_kept_only_with_update_reference(tmp_path, capsys):
     """A GTSPLIB copy whose best_known value greedy beats: the run says how many solves went below
     and how to keep them, and writes nothing there; with --update-reference (the solve re-used)

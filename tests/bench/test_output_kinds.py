@@ -133,6 +133,9 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
               objective=u574 + 100, lower_bound=u574 - 0.01 * u574, runtime_s=3600.4),
         _rows(instance="131p654", solver="milp", label="milp", status="optimal", seed=1,
               objective=known["131p654"].value, lower_bound=known["131p654"].value, runtime_s=229.5),
+        _rows(instance="132d657", solver="milp", label="milp certificate=true", status="optimal",
+              seed=0, objective=known["132d657"].value, lower_bound=known["132d657"].value,
+              runtime_s=1160.0, note="certificate checked: proven optimal: 22498 (proofs/x.cert.json.gz)"),
         _rows(instance="145u724", solver="milp", label="milp", status="failed", objective=math.nan,
               runtime_s=12.0),
     ])
@@ -143,6 +146,8 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     assert "| time limit (milp, seed 0) | 3600 |" in line and line.endswith("| 1.000 % |")  # vs best known
     line = next(x for x in lines if x.startswith("| 131p654 |"))
     assert "(optimal) | proven (milp, seed 1) | 230 |" in line and line.endswith("| 0.000 % |")
+    line = next(x for x in lines if x.startswith("| 132d657 |"))
+    assert "| proven, certificate checked (milp certificate=true, seed 0) | 1160 |" in line
     line = next(x for x in lines if x.startswith("| 99d493 |"))
     assert "not run; proven earlier, certificate shipped" in line
     open_file = next(r.name for r in known.values()
@@ -151,7 +156,7 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     failed = next(x for x in lines if x.startswith("| 145u724 |"))
     assert failed.endswith("| failed (milp, seed 0) | 12 | - | - | - |")
     proven = sum(r.proven for r in known.values() if 493 <= r.nodes <= 1084 and r.symmetric)
-    assert f"{proven} of 20 files proven optimal (1 by the solves below); 3 of 20 run." in text
+    assert f"{proven} of 20 files proven optimal (2 by the solves below); 4 of 20 run." in text
 
 
 def test_glns_targets_block_counts_files_runs_and_the_worst():

@@ -13,6 +13,7 @@ from gtsp_bench.solvers.heuristics.greedy import Greedy
 from gtsp_bench.bench.pool import (
     MAX_ATTEMPTS,
     SOLVE_THREADS_VAR,
+    check_written_certificate,
     run_jobs,
     solve_message,
     solve_threads,
@@ -164,3 +165,37 @@ def test_workers_are_told_the_threads_a_solve_may_run(monkeypatch):
                  n_workers, 60.0, lambda job, rec, p: got.__setitem__(job, rec))
         assert got[n_workers]["stats"]["omp"] == "1"
         assert got[n_workers]["stats"]["workers"] == min(want, cores)
+
+
+def test_a_written_certificate_is_checked_and_a_bad_one_named(tmp_path):
+    """A solve message with a certificate path: the solver writes the proof there (a stale file
+    of an earlier attempt removed first) and the record's note is the checker's verdict; a
+    tampered certificate, a proof without one, and a solve that proved nothing each say so."""
+    import gzip
+
+    from gtsp_bench.solvers.exact.milp import Milp
+
+    from gtsp_bench.proof.format import read_certificate, write_certificate
+    from gtsp_bench.registry import run_solver
+
+    path = tmp_path / "proofs" / "k4.cert.json.gz"
+    path.parent.mkdir()
+    path.write_bytes(gzip.compress(b"{}"))  # a stale, unreadable file from an earlier attempt
+    rec = solve_message(Milp(), "milp", {**_msg(0.5), "certificate": str(path)}, {})
+    assert rec["status"] == "optimal"
+    assert rec["note"].startswith(f"certificate checked: proven optimal: {rec['objective']:.10g} ")
+    assert rec["note"].endswith(f" (proofs/{path.name})")  # float costs: the certified gap between
+    cert = read_certificate(path)
+    cert["value"] -= 1.0  # a tour priced wrong
+    write_certificate(path, cert)
+    res = run_solver("milp", INSTANCE, 0.5)
+    assert check_written_certificate(INSTANCE, str(path), res).startswith("certificate fails: ")
+    path.unlink()
+    assert check_written_certificate(INSTANCE, str(path), res) == "no certificate: none written"
+    assert check_written_certificate(INSTANCE, str(path), replace_status(res, "time_limit")) == ""
+
+
+def replace_status(res, status):
+    from dataclasses import replace
+
+    return replace(res, status=status)
