@@ -155,7 +155,8 @@ def test_a_reference_names_who_proved_it_and_whose_tour_it_is():
     refs = gtsplib.best_known()
     assert refs["11berlin52"].reference_source == "Fischetti et al. 1997; GLKH tour"
     assert refs["99d493"].reference_source == "milp, certificate proofs/99d493.cert.json.gz; GLKH tour"
-    assert refs["115u574"].reference_source == "GLKH"
+    open_file = next(r for r in refs.values() if not r.proven and r.source == "GLKH")  # files get proven
+    assert open_file.reference_source == "GLKH"
     assert refs["464u2319"].reference_source == refs["464u2319"].source != "GLKH"  # a kept tour
 
 
@@ -320,13 +321,13 @@ _CERTIFIED = [r for r in gtsplib.best_known().values() if r.certificate]
 
 def test_certificates_are_named_for_proven_rows_and_shipped():
     """Every named certificate is a shipped file of a proven row, every shipped file is named,
-    and together they stay under 8 MB."""
+    and together they stay under 20 MB (a proof of about 1,500 leaves, 115u574's, takes 8.3 MB)."""
     assert len(_CERTIFIED) >= 40
     for ref in _CERTIFIED:
         assert ref.proven and (GTSPLIB / ref.certificate).is_file(), ref.name
     shipped = {p.name for p in (GTSPLIB / "proofs").glob("*.cert.json.gz")}
     assert shipped == {ref.certificate.split("/")[-1] for ref in _CERTIFIED}
-    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 8_000_000
+    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 20_000_000
 
 
 @pytest.mark.parametrize("ref", _CERTIFIED, ids=lambda r: r.name)
