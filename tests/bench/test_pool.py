@@ -172,6 +172,7 @@ def test_a_written_certificate_is_checked_and_a_bad_one_named(tmp_path):
     of an earlier attempt removed first) and the record's note is the checker's verdict; a
     tampered certificate, a proof without one, and a solve that proved nothing each say so."""
     import gzip
+    from dataclasses import replace
 
     from gtsp_bench.solvers.exact.milp import Milp
 
@@ -192,10 +193,4 @@ def test_a_written_certificate_is_checked_and_a_bad_one_named(tmp_path):
     assert check_written_certificate(INSTANCE, str(path), res).startswith("certificate fails: ")
     path.unlink()
     assert check_written_certificate(INSTANCE, str(path), res) == "no certificate: none written"
-    assert check_written_certificate(INSTANCE, str(path), replace_status(res, "time_limit")) == ""
-
-
-def replace_status(res, status):
-    from dataclasses import replace
-
-    return replace(res, status=status)
+    assert check_written_certificate(INSTANCE, str(path), replace(res, status="time_limit")) == ""
