@@ -86,8 +86,10 @@ def _limit_threads() -> None:
 
 
 def solve_message(solver: Any, name: str, msg: Mapping[str, Any], cache: dict[str, Any]) -> dict[str, Any]:
-    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options, initial]}``
-    (``initial``: a warm start ``[order, heads]``) through the harness; a batch message
+    """Solve one task message ``{fingerprint, text, omega, seed, time_limit[, options, initial,
+    certificate]}`` (``initial``: a warm start ``[order, heads]``; ``certificate``: where the
+    solver writes a proof's certificate, which is then checked, the verdict the record's note:
+    :func:`check_written_certificate`) through the harness; a batch message
     (``batch``: a list of ``{fingerprint, text}``, ``repeats``) is solved in one call
     (:func:`gtsp_bench.registry.run_solver_batch`) and answered with one record per instance in
     ``items``.
