@@ -266,12 +266,17 @@ class LKH:
                 params, text = self._params(left, seed, first), _problem_text(matrix)
                 found = elkai.solve_problem(params, text) if first is None else _solve_apart(params, text)
                 atsp = np.asarray(found, dtype=np.int64) - 1
+            spent = time.perf_counter() - start >= time_limit
+            partial = len(atsp) > 0 and sorted(atsp.tolist()) != list(range(problem.n_nodes))
+            if partial and spent:  # LKH stopped by its limit mid-tour (seen on a loaded machine)
+                stats["lkh_partial"] = len(atsp)
+                atsp = atsp[:0]
             if len(atsp) == 0:  # the limit ran out before LKH's first tour: a valid tour all the same
                 tour = (problem.to_tour(initial.order, initial.heads) if initial is not None
                         else greedy_tour(problem, greedy_starts(problem)[0]))
                 stats["fallback"] = "warm_start" if initial is not None else "greedy"
                 contiguous = True
-            elif sorted(atsp.tolist()) != list(range(problem.n_nodes)):
+            elif partial:
                 raise SolverError(f"LKH returned no tour through all nodes of {instance.name}")
             else:
                 tour, contiguous = tour_from_atsp(atsp, problem.cluster_of)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import json
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -219,8 +220,25 @@ def test_no_tour_from_lkh_falls_back(monkeypatch, warm):
     assert greedy.objective > run_solver("milp", inst, 0.5).objective  # the cases differ
 
 
+def test_a_partial_tour_after_the_limit_falls_back(monkeypatch):
+    """A tour that misses nodes once the limit is spent (LKH stopped mid-tour: seen with a 0.01 s
+    limit on a loaded machine) is treated as no tour: the greedy fallback, status time_limit."""
+    class Slow:
+        @staticmethod
+        def solve_problem(params: str, text: str) -> list[int]:
+            time.sleep(0.05)
+            return [1, 2, 3]
+
+    monkeypatch.setattr(peer, "_import_elkai", lambda: Slow)
+    inst = generate_instance(8, 4, seed=3)
+    r = run_solver("lkh", inst, 0.5, time_limit=0.01)
+    assert r.status == "time_limit" and r.stats["fallback"] == "greedy" and r.stats["lkh_partial"] == 3
+    greedy = run_solver("greedy", inst, 0.5)
+    assert (r.order, r.heads) == (greedy.order, greedy.heads)
+
+
 def test_a_partial_tour_from_lkh_is_an_error(monkeypatch):
-    """A tour that misses nodes (not the empty answer of a spent limit) is refused."""
+    """A tour that misses nodes within the limit (not the answer of a spent limit) is refused."""
     class Fake:
         @staticmethod
         def solve_problem(params: str, text: str) -> list[int]:
