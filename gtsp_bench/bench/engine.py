@@ -427,13 +427,14 @@ def run_benchmark(name: str, settings: Settings, *, say: Callable[[str], None] =
 def _say_certificates(p: Plan, outcome: Outcome, out_dir: Path, say: Callable[[str], None]) -> None:
     """One line on the certificates of a ``-p certificate=true`` run; a certificate the checker
     refused, or a proof that wrote none, is an error of the run (exit code 1)."""
-    from gtsp_bench.bench.pool import CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE
+    from gtsp_bench.bench.pool import CERTIFICATE_CHECKED, certificate_verdict
 
     notes = [str(outcome.records.get(k, {}).get("note") or "") for k, t in p.tasks.items() if t.certificate]
     if not notes:
         return
-    checked = sum(n.startswith(CERTIFICATE_CHECKED) for n in notes)
-    bad = [n for n in notes if n.startswith((CERTIFICATE_FAILS, NO_CERTIFICATE))]
+    verdicts = [certificate_verdict(n) for n in notes]
+    checked = verdicts.count(CERTIFICATE_CHECKED)
+    bad = [n for n, v in zip(notes, verdicts, strict=True) if v not in (None, CERTIFICATE_CHECKED)]
     say(f"certificates: {checked} written to {out_dir / PROOFS_DIR} and checked, {len(bad)} not; "
         f"{len(notes) - checked - len(bad)} solve(s) proved nothing")
     outcome.errors += bad

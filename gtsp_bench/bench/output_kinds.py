@@ -229,7 +229,7 @@ def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
     and solve; a file without a solve shows its ``best_known.csv`` status. The certified gap is
     the solve's bound against the better of its tour and the best-known tour."""
     from gtsp_bench.bench.definitions import Gtsplib
-    from gtsp_bench.bench.pool import CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE
+    from gtsp_bench.bench.pool import certificate_verdict
     from gtsp_bench.bench.sources import gtsplib_references
 
     refs = [r for src in bench.sources if isinstance(src, Gtsplib) for _, r in gtsplib_references(src)]
@@ -243,9 +243,8 @@ def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
             lines.append(f"| {r.name} | {known} | {proof} | | | | |")
         for row in mine.itertuples():
             what = "proven" if row.status == "optimal" else str(row.status).replace("_", " ")
-            checked = [n for n in (CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE)
-                       if str(row.note).startswith(n)]
-            what += f", {checked[0]}" if checked else ""
+            verdict = certificate_verdict(row.note)
+            what += f", {verdict}" if verdict else ""
             upper = min(row.objective, r.value) if math.isfinite(row.objective) else r.value
             lb = row.lower_bound
             gap = f"{100.0 * (upper - lb) / upper:.3f} %" if math.isfinite(lb) else "-"

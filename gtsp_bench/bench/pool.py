@@ -59,6 +59,14 @@ CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE = (
     "certificate checked", "certificate fails", "no certificate")
 
 
+def certificate_verdict(note: object) -> str | None:
+    """The certificate verdict a row's ``note`` begins with (:data:`CERTIFICATE_CHECKED`,
+    :data:`CERTIFICATE_FAILS` or :data:`NO_CERTIFICATE`), else ``None``."""
+    text = str(note)
+    return next((v for v in (CERTIFICATE_CHECKED, CERTIFICATE_FAILS, NO_CERTIFICATE)
+                 if text.startswith(v)), None)
+
+
 def failure(note: str, status: str = "failed", cause: str = "solver") -> dict[str, Any]:
     """A result record for a solve that gave no solution (``cause``: whose fault it was)."""
     out: dict[str, Any] = {"status": status, "objective": None, "note": note}

@@ -11,8 +11,12 @@ import sys
 from gtsp_bench.solvers.heuristics.greedy import Greedy
 
 from gtsp_bench.bench.pool import (
+    CERTIFICATE_CHECKED,
+    CERTIFICATE_FAILS,
     MAX_ATTEMPTS,
+    NO_CERTIFICATE,
     SOLVE_THREADS_VAR,
+    certificate_verdict,
     check_written_certificate,
     run_jobs,
     solve_message,
@@ -194,3 +198,7 @@ def test_a_written_certificate_is_checked_and_a_bad_one_named(tmp_path):
     path.unlink()
     assert check_written_certificate(INSTANCE, str(path), res) == "no certificate: none written"
     assert check_written_certificate(INSTANCE, str(path), replace(res, status="time_limit")) == ""
+    # every note is read back as its verdict (the summary line and the frontier table read them)
+    notes = [rec["note"], check_written_certificate(INSTANCE, str(path), res), "", "nan"]
+    assert [certificate_verdict(n) for n in notes] == [CERTIFICATE_CHECKED, NO_CERTIFICATE, None, None]
+    assert certificate_verdict("certificate fails: leaf 3 open") == CERTIFICATE_FAILS
