@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from gtsp_bench.energy import evaluate
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.registry import register_solver, run_solver, solver_names
 
@@ -18,11 +19,15 @@ def _blocks(path: Path, lang: str = "python") -> list[str]:
 
 
 def test_readme_api_example_runs():
-    """The README's Python example runs, and stays within ten lines."""
+    """The README's Python example runs, and stays within ten lines: its result is a tour of the
+    instance it made, priced as the evaluator prices it."""
     (block,) = _blocks(REPO / "README.md")
     assert "run_solver" in block and len(block.strip().splitlines()) <= 10
-    exec(compile(block, "README.md", "exec"), {})
-    assert run_solver("greedy", generate_instance(3, seed=0), 0.5).status == "feasible"
+    ns: dict = {}
+    exec(compile(block, "README.md", "exec"), ns)
+    inst, result = ns["inst"], ns["result"]
+    assert result.status == "feasible" and sorted(result.order) == list(range(inst.n_clusters))
+    assert result.objective == evaluate(inst, 0.3, result.order, result.heads).objective
 
 
 def test_readme_lists_every_builtin_solver():

@@ -145,7 +145,7 @@ def test_solve_message_record_carries_the_trajectory():
     assert 0 <= t <= rec["runtime_s"] and objective == rec["objective"] and bound is None
     keyed = {**rec, "key": f"{INSTANCE.name}#ab|greedy|w=0.4|seed=0|tl=5", "solver": "greedy",
              "omega": 0.4, "seed": 0}
-    assert check_log_record(json.loads(json.dumps(keyed)), INSTANCE.sizes) is not None
+    assert check_log_record(json.loads(json.dumps(keyed)), INSTANCE.sizes) == keyed
     assert "trajectory" not in solve_message(Crash(), "crash", _msg(0.4), {})
 
 

@@ -305,9 +305,9 @@ def test_console_script_starts_without_torch(tmp_path):
     code = (
         "import sys\n"
         "from gtsp_bench.cli import main\n"
-        f"main(['generate', '-k', '3', '-n', '4', '-o', {str(inst)!r}])\n"
-        "main(['solvers'])\n"
-        f"main(['solve', {str(inst)!r}, '-s', 'greedy', '--json'])\n"
+        f"assert main(['generate', '-k', '3', '-n', '4', '-o', {str(inst)!r}]) == 0\n"
+        "assert main(['solvers']) == 0\n"
+        f"assert main(['solve', {str(inst)!r}, '-s', 'greedy', '--json']) == 0\n"
         "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
         "assert 'torch' not in sys.modules, 'torch was imported'\n"
         "assert 'highspy' not in sys.modules and 'ortools' not in sys.modules\n"

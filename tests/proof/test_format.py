@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gzip
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -54,9 +55,16 @@ def test_bad_files_are_refused(tmp_path: Path, data: bytes, reason: str) -> None
 
 
 def test_fingerprint_names_the_costs() -> None:
+    """The same costs, priced twice (another instance object), give one fingerprint; another
+    omega, or one node cost changed, another."""
     inst = generate_instance(4, 3, seed=0)
-    assert fingerprint(price(inst, 0.5)) == fingerprint(price(inst, 0.5))
+    again = generate_instance(4, 3, seed=0)
+    assert fingerprint(price(inst, 0.5)) == fingerprint(price(again, 0.5))
     assert fingerprint(price(inst, 0.5)) != fingerprint(price(inst, 0.6))
+    base = price(inst, 0.5)
+    cost = base.node_cost.copy()
+    cost[1] += 1e-6
+    assert fingerprint(replace(base, node_cost=cost)) != fingerprint(base)
 
 
 def test_variables() -> None:

@@ -161,6 +161,16 @@ def test_without_ax_a_new_figure_is_made(rows):
 
 
 def test_solver_colors_are_stable():
-    """Known solvers keep their colour; unknown names get the same colour every time."""
+    """Known solvers keep their colour; an unknown name gets the same colour in every process
+    (another process with another string-hash seed picks the same one)."""
+    import os
+    import subprocess
+    import sys
+
     assert plots.solver_color("greedy") == "tab:orange"
-    assert plots.solver_color("new-solver") == plots.solver_color("new-solver")
+    code = "from gtsp_bench.report import plots; print(plots.solver_color('new-solver'))"
+    env = dict(os.environ, PYTHONHASHSEED="12345")
+    other = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                           check=True).stdout.strip()
+    assert other == plots.solver_color("new-solver")
+    assert plots.solver_color("new-solver") in plots._PALETTE

@@ -131,3 +131,6 @@ def test_gurobi_backend_when_installed():
         sol = MilpTextbook(backend="auto").solve(big, 0.5, time_limit=0.5)
         assert sol.stats["backend"] == "highs"
         assert sol.stats["gurobi"] == "size-limited licence refused the model"
+    else:  # a full licence: the big model is solved by Gurobi, never below dp's optimum
+        assert r.stats["backend"] == "gurobi" and r.status in ("optimal", "time_limit")
+        assert r.objective >= run_solver("dp", big, 0.5).objective * (1 - 1e-9)

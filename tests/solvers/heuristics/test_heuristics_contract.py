@@ -8,6 +8,9 @@ import json
 import pytest
 
 from gtsp_bench.cli import main
+from gtsp_bench.data.io import read_instance
+from gtsp_bench.energy import evaluate
+from gtsp_bench.registry import run_solver
 
 HEURISTICS = ["greedy+ls", "aco", "aco+ls", "lns", "ortools"]
 #: Peers whose package is an optional extra: tested where it is installed.
@@ -47,9 +50,13 @@ def test_rho_one_is_allowed(capsys, k12):
 
 @pytest.mark.parametrize("solver", HEURISTICS)
 def test_time_limit_hit_returns_best_tour(capsys, k12, solver):
-    """A limit far too short: still a feasible tour (checked by the evaluator), status time_limit."""
+    """A limit far too short: still a feasible tour, status time_limit, its objective the
+    evaluator's price of its tour and never below the DP's optimum."""
     assert main(["solve", str(k12), "--solver", solver, "--time-limit", "1e-6", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["status"] == "time_limit"
     assert sorted(result["order"]) == list(range(12))
-    assert result["objective"] > 0
+    inst, omega = read_instance(k12), result["omega"]
+    priced = evaluate(inst, omega, result["order"], result["heads"]).objective
+    assert result["objective"] == pytest.approx(priced, rel=1e-12)
+    assert priced >= run_solver("dp", inst, omega).objective * (1 - 1e-9)

@@ -128,11 +128,14 @@ def test_seed_reproduces_the_run():
 
 
 def test_time_limit_returns_best_tour():
-    """A tiny limit still gives a feasible tour, with status time_limit."""
+    """A tiny limit still gives a feasible tour, with status time_limit, never below milp's
+    proven optimum."""
     inst = generate_instance(15, 10, seed=0)
     r = run_solver("lns", inst, 0.5, time_limit=1e-6)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(15))
+    optimum = run_solver("milp", inst, 0.5)
+    assert optimum.status == "optimal" and r.objective >= optimum.objective * (1 - 1e-9)
 
 
 def test_gtsplib_file():
@@ -257,7 +260,6 @@ def test_windowed_search_never_below_dp_optimum(seed):
     r = run_solver(get_solver("lns", reopt_window=1), inst, 0.5, seed=seed, time_limit=0.3)
     assert sorted(r.order) == list(range(12))
     assert r.objective >= optimum - 1e-9 * optimum
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
 def test_fitted_trials_leave_converging_runs_alone():
@@ -283,14 +285,14 @@ def test_fitted_trials_fill_a_short_budget():
 def test_large_cycles_fit_only_whole_trials():
     """Above LARGE clusters a fitted trial is not cut below its default length (25 iterations per
     cluster) except by the time limit: however many trials fit_trials asks for, every finished
-    trial but the last ran them all; the answer is valid and priced as the evaluator prices it.
+    trial but the last ran them all; the answer is valid and priced as the evaluator prices it
+    (run_solver refuses any other claim).
     (One thread: islands each end a trial at the exchange too.)"""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     r = run_solver(get_solver("lns", fit_trials=64, **BUDGET), inst, 0.5, seed=1, time_limit=3.0)
     assert r.stats["iterations"] >= 25 * (n + 1) * (r.stats["trials"] - 1)
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
 def test_macro_tour_is_off_by_default():
@@ -302,13 +304,13 @@ def test_macro_tour_is_off_by_default():
 @pytest.mark.parametrize("seed", range(3))
 def test_macro_start_never_below_dp_optimum(seed):
     """The macro first tour forced on K = 12 UAV instances (the depot a cluster of its own): a
-    valid tour, never below the DP's proven optimum, priced as the evaluator prices it."""
+    valid tour, never below the DP's proven optimum, priced as the evaluator prices it
+    (run_solver refuses any other claim)."""
     inst = generate_instance(12, 3, seed=30 + seed)
     optimum = run_solver("dp", inst, 0.5).objective
     r = run_solver(get_solver("lns", macro=True, macro_iterations=5, **CONVERGE), inst, 0.5, seed=seed)
     assert sorted(r.order) == list(range(12))
     assert r.objective >= optimum - 1e-9 * optimum
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
 def test_macro_needs_points():
@@ -328,7 +330,6 @@ def test_macro_starts_large_cycles_elsewhere():
             for options in ({"macro": True}, {}, {"macro": False})]
     for r in runs:
         assert sorted(r.order) == list(range(n))
-        assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert runs[0].order != runs[1].order
     default, off = ((r.order, r.heads, r.objective) for r in runs[1:])
     assert default == off
@@ -346,11 +347,12 @@ def test_no_race_by_default():
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4])
 def test_race_on_very_small_instances(k):
-    """A race asked for on 1-4 clusters still returns a valid tour (up to 3 clusters no race)."""
+    """A race asked for on 1-4 clusters still returns a valid tour (up to 3 clusters no race),
+    the DP's optimum (the re-opt solves up to 3 clusters; 4 are a handful of orders)."""
     inst = generate_instance(k, 3, seed=k)
     r = run_solver(get_solver("lns", starts=3, **CONVERGE), inst, 0.5, seed=1)
     assert sorted(r.order) == list(range(k))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
+    assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
 
 
 def test_race_kinds():
@@ -373,7 +375,6 @@ def test_raced_starts_never_below_dp_optimum(seed):
     r = run_solver(get_solver("lns", starts=3, start_iterations=20, **CONVERGE), inst, 0.5, seed=seed)
     assert sorted(r.order) == list(range(12))
     assert r.objective >= optimum - 1e-9 * optimum
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["iterations"] > 3 * max(100, 20 * price(inst, 0.5).n_clusters)
     directed = _asymmetric(9, seed)
     d_opt = run_solver("dp", directed, None).objective

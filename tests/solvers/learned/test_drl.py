@@ -153,8 +153,12 @@ def test_local_option_is_saved_and_checked(tmp_path):
     from gtsp_bench.solvers.learned.checkpoint import load_policy
 
     path = tmp_path / "l.pt"
-    save_policy(PointerPolicy(n_nodes=3, dim=8, local=True), path)
-    assert load_policy(path, "drl").local is not None
+    policy = PointerPolicy(n_nodes=3, dim=8, local=True)
+    save_policy(policy, path)
+    loaded = load_policy(path, "drl")
+    assert loaded.config["local"] is True
+    assert all(torch.equal(a, b) for a, b in zip(policy.state_dict().values(),
+                                                 loaded.state_dict().values(), strict=True))
     save_policy(PointerPolicy(n_nodes=3, dim=8), path)
     assert "local" not in load_policy(path, "drl").config
     with pytest.raises(InputError, match="local must be true or false"):

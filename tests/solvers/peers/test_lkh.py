@@ -190,11 +190,14 @@ def test_seed_reproduces_and_options_reach_lkh(monkeypatch):
 
 
 def test_time_limit_status():
-    """A limit shorter than LKH's preprocessing still gives a valid tour, status time_limit."""
+    """A limit shorter than LKH's preprocessing still gives a valid tour, status time_limit,
+    never below milp's proven optimum."""
     inst = generate_instance(20, 20, seed=0)
     r = run_solver("lkh", inst, 0.5, time_limit=0.01)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(20))
+    optimum = run_solver("milp", inst, 0.5)
+    assert optimum.status == "optimal" and r.objective >= optimum.objective * (1 - 1e-9)
 
 
 @pytest.mark.parametrize("warm", [False, True])

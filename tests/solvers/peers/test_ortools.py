@@ -106,16 +106,20 @@ def test_every_offered_first_solution_strategy_builds_a_tour(first_solution):
     """Each offered strategy exists in the installed OR-Tools and builds a tour of this model
     (greedy descent to its local optimum: a tenth of a second)."""
     solver = get_solver("ortools", first_solution=first_solution, metaheuristic="GREEDY_DESCENT")
-    r = run_solver(solver, generate_instance(6, 4, seed=3), 0.5, time_limit=30)
+    inst = generate_instance(6, 4, seed=3)
+    r = run_solver(solver, inst, 0.5, time_limit=30)
     assert sorted(r.order) == list(range(6)) and r.status == "feasible"
+    assert r.objective >= run_solver("brute", inst, 0.5).objective * (1 - 1e-9)
 
 
 @pytest.mark.parametrize("metaheuristic", peer.METAHEURISTICS)
 def test_every_offered_metaheuristic_runs(metaheuristic):
     """Each offered metaheuristic exists in the installed OR-Tools and returns a tour."""
     solver = get_solver("ortools", metaheuristic=metaheuristic, solution_limit=20)
-    r = run_solver(solver, generate_instance(5, 3, seed=3), 0.5, time_limit=0.3)
+    inst = generate_instance(5, 3, seed=3)
+    r = run_solver(solver, inst, 0.5, time_limit=0.3)
     assert sorted(r.order) == list(range(5))
+    assert r.objective >= run_solver("brute", inst, 0.5).objective * (1 - 1e-9)
 
 
 @pytest.mark.parametrize(("options", "message"), [

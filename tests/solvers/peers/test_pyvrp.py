@@ -55,11 +55,13 @@ def test_gtsplib_file():
 
 
 def test_time_limit_status():
-    """A short limit stops PyVRP with a feasible tour and status time_limit."""
-    r = run_solver(get_solver("pyvrp", no_improvement=10**9), generate_instance(10, 5, seed=0), 0.5,
-                   time_limit=0.05)
+    """A short limit stops PyVRP with a feasible tour and status time_limit, never below the
+    DP's optimum."""
+    inst = generate_instance(10, 5, seed=0)
+    r = run_solver(get_solver("pyvrp", no_improvement=10**9), inst, 0.5, time_limit=0.05)
     assert r.status == "time_limit"
     assert sorted(r.order) == list(range(10))
+    assert r.objective >= run_solver("dp", inst, 0.5).objective * (1 - 1e-9)
 
 
 def test_seed_reproduces_the_run():
