@@ -304,6 +304,22 @@ def _keys(df: pd.DataFrame) -> list[tuple[str, ...]]:
     return list(zip(*cols, strict=True))
 
 
+def _check_best_found(old: pd.DataFrame, old_keys: list[tuple[str, ...]], new: pd.DataFrame,
+                      new_keys: list[tuple[str, ...]]) -> None:
+    """Refuse a merge that would leave a point (set, instance, omega: a key's first three) with
+    old and new rows where a row of it has a ``best_found`` reference (:func:`merge_rows`)."""
+    found = {k[:3] for df, ks in ((old, old_keys), (new, new_keys))
+             for k, kind in zip(ks, df["reference_kind"], strict=True) if kind == "best_found"}
+    fresh = set(new_keys)
+    touched = {k[:3] for k in new_keys}
+    for key in old_keys:
+        point = key[:3]
+        if point in found and point in touched and key not in fresh:
+            raise ValueError(f"the rows of {', '.join(point)} have gaps to the best found of "
+                             "their own run, and the new rows replace only some of them; run the "
+                             "whole point (every label and seed of it) or the whole benchmark")
+
+
 def merge_rows(old: pd.DataFrame, new: pd.DataFrame) -> tuple[pd.DataFrame, int, int]:
     """``old``'s rows with each solve of ``new`` (same :data:`ROW_KEY`) in place of its old row,
     and ``new``'s other rows appended: a partial rerun folded into a whole benchmark's rows.
@@ -318,22 +334,22 @@ def merge_rows(old: pd.DataFrame, new: pd.DataFrame) -> tuple[pd.DataFrame, int,
     ------
     ValueError
         When the frames are rows of different benchmarks, when a solve appears twice in one of
-        them, or when a row's reference is the best found of its own run (``best_found``: it
-        depends on the other rows of that run, so a merge could leave a gap to a value that is
-        no longer the best of the table).
+        them, or when a point (set, instance, omega) would hold old and new rows and some row
+        of it measures its gap to the best found of its own run (``best_found``: that depends on
+        the other rows of the run's point, so the table could be left with a gap to a value that
+        is no longer its point's best). A point the new rows replace whole, or do not touch,
+        keeps its own rows' references and is merged.
     """
     benchmarks = set(old["benchmark"]) | set(new["benchmark"])
     if len(benchmarks) > 1:
         raise ValueError(f"rows of different benchmarks: {', '.join(sorted(map(str, benchmarks)))}")
     keys = {}
     for name, df in (("the old rows", old), ("the new rows", new)):
-        if (df["reference_kind"] == "best_found").any():
-            raise ValueError(f"{name} have gaps to the best found of their own run; "
-                             "run the whole benchmark instead")
         keys[name] = _keys(df)
         if len(set(keys[name])) < len(keys[name]):
             twice = next(k for k in keys[name] if keys[name].count(k) > 1)
             raise ValueError(f"{name} hold one solve twice ({', '.join(twice)})")
+    _check_best_found(old, keys["the old rows"], new, keys["the new rows"])
     where = {k: i for i, k in enumerate(keys["the old rows"])}
     merged, fresh = old[list(COLUMNS)].copy(), new[list(COLUMNS)]
     added = []

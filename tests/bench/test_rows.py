@@ -141,9 +141,23 @@ def test_merge_replaces_the_same_solves_and_appends_the_others():
 @pytest.mark.parametrize("old, new, message", [
     (_rows(("a", None, 1, 1.0)), _rows(("a", None, 1, 1.0), benchmark="c"), "different benchmarks"),
     (_rows(("a", None, 1, 1.0), ("a", None, 1, 2.0)), _rows(("a", None, 1, 1.0)), "one solve twice"),
-    (_rows(("a", None, 1, 1.0)), _rows(("a", None, 1, 1.0), kind="best_found"), "best found"),
+    (_rows(("a", None, 1, 1.0), ("a", None, 2, 1.0)), _rows(("a", None, 1, 1.0), kind="best_found"),
+     "best found"),
+    (_rows(("a", None, 1, 1.0), ("a", None, 2, 1.0), kind="best_found"), _rows(("a", None, 2, 1.0)),
+     "best found"),
 ])
 def test_merge_refuses_what_it_cannot_fold(old, new, message):
-    """Rows of another benchmark, a solve twice, or gaps to a run's own best found: refused."""
+    """Rows of another benchmark, a solve twice, or a point whose rows have gaps to a run's own
+    best found, with only some of them replaced: refused."""
     with pytest.raises(ValueError, match=message):
         merge_rows(old, new)
+
+
+def test_merge_takes_whole_points_with_their_own_best_found():
+    """Gaps to a run's own best found are merged where the point keeps one run's rows: a point
+    the new rows replace whole (and one they add), and a point they do not touch."""
+    old = _rows(("a", 0.0, 1, 10.0), ("a", 0.0, 2, 11.0), ("b", 0.0, 1, 20.0), kind="best_found")
+    new = _rows(("a", 0.0, 1, 9.0), ("a", 0.0, 2, 9.5), ("c", 0.0, 1, 30.0), kind="best_found")
+    merged, replaced, added = merge_rows(old, new)
+    assert (replaced, added) == (2, 1)
+    assert merged["objective"].tolist() == [9.0, 9.5, 20.0, 30.0]
