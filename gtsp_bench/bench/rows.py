@@ -315,7 +315,8 @@ def _check_best_found(old: pd.DataFrame, old_keys: list[tuple[str, ...]], new: p
     for key in old_keys:
         point = key[:3]
         if point in found and point in touched and key not in fresh:
-            raise ValueError(f"the rows of {', '.join(point)} have gaps to the best found of "
+            where = f"{point[0]} {point[1]}" + (f" omega {point[2]}" if point[2] else "")
+            raise ValueError(f"the rows of {where} have gaps to the best found of "
                              "their own run, and the new rows replace only some of them; run the "
                              "whole point (every label and seed of it) or the whole benchmark")
 

@@ -142,9 +142,9 @@ def test_merge_replaces_the_same_solves_and_appends_the_others():
     (_rows(("a", None, 1, 1.0)), _rows(("a", None, 1, 1.0), benchmark="c"), "different benchmarks"),
     (_rows(("a", None, 1, 1.0), ("a", None, 1, 2.0)), _rows(("a", None, 1, 1.0)), "one solve twice"),
     (_rows(("a", None, 1, 1.0), ("a", None, 2, 1.0)), _rows(("a", None, 1, 1.0), kind="best_found"),
-     "best found"),
-    (_rows(("a", None, 1, 1.0), ("a", None, 2, 1.0), kind="best_found"), _rows(("a", None, 2, 1.0)),
-     "best found"),
+     "rows of s a have gaps to the best found"),
+    (_rows(("a", 0.5, 1, 1.0), ("a", 0.5, 2, 1.0), kind="best_found"), _rows(("a", 0.5, 2, 1.0)),
+     "rows of s a omega 0.5 have gaps to the best found"),
 ])
 def test_merge_refuses_what_it_cannot_fold(old, new, message):
     """Rows of another benchmark, a solve twice, or a point whose rows have gaps to a run's own
