@@ -296,9 +296,8 @@ def test_budget_runs_fail_passes_from_fail_from(n, passes):
     """A budget run on a cycle of FAIL_FROM clusters (K = FAIL_FROM - 1 and the base station)
     re-solves regions after its failed trials by default (windows counted in its stats), one of
     a cluster fewer does not; both give a valid tour priced as the evaluator prices it
-    (run_solver refuses any other claim) (short
-    trials, so that some fail; no kicks, which come first after a failed trial and on a loaded
-    machine could spend the budget before a pass)."""
+    (run_solver refuses any other claim). Short trials, so that some fail; no kicks, which come
+    first after a failed trial and on a loaded machine could spend the budget before a pass."""
     inst = generate_instance(n, 2, seed=3, zeta=10.0, area=4000.0)
     r = run_solver(get_solver("lns", effort="budget", iterations=100, path_clusters=40,
                               path_iterations=1, kicks=0), inst, 0.5, seed=1, time_limit=1.5)
