@@ -22,6 +22,9 @@ from gtsp_bench.registry import (
 
 from .tiny_cases import tiny_asymmetric_case
 
+#: The optional extras' solvers and the package each needs (tests of them skip without it).
+_OPTIONAL_PACKAGE = {"gurobi": "gurobipy", "lkh": "elkai", "pyvrp": "pyvrp"}
+
 
 class Fixed:
     """A test solver that returns whatever it was built with."""
@@ -361,7 +364,8 @@ def test_aco_on_asymmetric_instances():
 def test_peers_find_brutes_optimum_on_asymmetric_instances(name, options, seed):
     """The peers take the directed matrix as it is (PyVRP's and OR-Tools' arc matrices are row =
     from; LKH gets the Noon-Bean ATSP): on tiny instances they find brute's optimum."""
-    pytest.importorskip({"pyvrp": "pyvrp", "ortools": "ortools", "lkh": "elkai"}[name])
+    if name in _OPTIONAL_PACKAGE:  # ortools is a core dependency: never skipped
+        pytest.importorskip(_OPTIONAL_PACKAGE[name])
     inst, best = tiny_asymmetric_case(seed)
     r = run_solver(get_solver(name, **options), inst, None, time_limit=10.0, seed=seed)
     assert r.objective == pytest.approx(best, rel=1e-12)
@@ -495,8 +499,6 @@ def test_a_solver_without_initial_refuses_a_warm_start(tiny):
 #: Options that let each solver end by its own criterion on a small instance, not by the clock.
 _OWN_END = {"aco": {"iterations": 20}, "aco+ls": {"iterations": 20}, "lns": {"stop_at_convergence": True},
             "ortools": {"solution_limit": 100}, "pyvrp": {"no_improvement": 300}}
-#: The optional extras' solvers and the package each needs.
-_OPTIONAL_PACKAGE = {"gurobi": "gurobipy", "lkh": "elkai", "pyvrp": "pyvrp"}
 
 
 def _builtin_names() -> list[str]:
