@@ -12,6 +12,8 @@ from gtsp_bench.instance import Instance
 REPO = Path(__file__).resolve().parents[1]
 #: The GTSPLIB library, a folder of the repository (instances/gtsplib/README.md).
 GTSPLIB = REPO / "instances" / "gtsplib"
+#: The optional extras' solvers and the package each needs (their tests run where it is installed).
+OPTIONAL_PACKAGE = {"gurobi": "gurobipy", "lkh": "elkai", "pyvrp": "pyvrp"}
 
 
 @pytest.fixture

@@ -20,10 +20,8 @@ from gtsp_bench.registry import (
     solver_names,
 )
 
-from .tiny_cases import tiny_asymmetric_case
-
-#: The optional extras' solvers and the package each needs (tests of them skip without it).
-_OPTIONAL_PACKAGE = {"gurobi": "gurobipy", "lkh": "elkai", "pyvrp": "pyvrp"}
+from .conftest import OPTIONAL_PACKAGE
+from .tiny_cases import not_below, tiny_asymmetric_case
 
 
 class Fixed:
@@ -329,7 +327,7 @@ def test_greedy_follows_outgoing_arcs(seed):
     cluster (row = from), starting from a node of the smallest cluster."""
     inst, best = tiny_asymmetric_case(seed)
     r = run_solver("greedy", inst, None)
-    assert r.objective >= best - 1e-9
+    assert not_below(r.objective, best)
     tour = [int(inst.offsets[c] + r.heads[c]) for c in r.order]
     smallest = int(np.argmin(inst.sizes))
     start = next(i for i, v in enumerate(tour) if inst.cluster_of[v] == smallest)
@@ -350,7 +348,7 @@ def test_aco_on_asymmetric_instances():
         inst, best = tiny_asymmetric_case(seed)
         for name in found:
             r = run_solver(name, inst, None, seed=seed)
-            assert r.objective >= best - 1e-9
+            assert not_below(r.objective, best)
             found[name] += r.objective == pytest.approx(best, rel=1e-12)
     assert found["aco"] >= 4 and found["aco"] > found["greedy"]
 
@@ -364,8 +362,8 @@ def test_aco_on_asymmetric_instances():
 def test_peers_find_brutes_optimum_on_asymmetric_instances(name, options, seed):
     """The peers take the directed matrix as it is (PyVRP's and OR-Tools' arc matrices are row =
     from; LKH gets the Noon-Bean ATSP): on tiny instances they find brute's optimum."""
-    if name in _OPTIONAL_PACKAGE:  # ortools is a core dependency: never skipped
-        pytest.importorskip(_OPTIONAL_PACKAGE[name])
+    if name in OPTIONAL_PACKAGE:  # ortools is a core dependency: never skipped
+        pytest.importorskip(OPTIONAL_PACKAGE[name])
     inst, best = tiny_asymmetric_case(seed)
     r = run_solver(get_solver(name, **options), inst, None, time_limit=10.0, seed=seed)
     assert r.objective == pytest.approx(best, rel=1e-12)
@@ -515,8 +513,8 @@ def test_every_solver_repeats_its_tour_for_a_seed(name):
     skipped (any other error at construction fails the test)."""
     from gtsp_bench.generator import generate_instance
 
-    if name in _OPTIONAL_PACKAGE:
-        pytest.importorskip(_OPTIONAL_PACKAGE[name])
+    if name in OPTIONAL_PACKAGE:
+        pytest.importorskip(OPTIONAL_PACKAGE[name])
     # K = 5 clusters of 20 nodes (the drl policy's size); brute gets 4 nodes a cluster
     inst = generate_instance(5, 4 if name == "brute" else 20, seed=11)
     solver = get_solver(name, **_OWN_END.get(name, {}))

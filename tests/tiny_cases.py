@@ -40,3 +40,9 @@ def tiny_asymmetric_case(seed: int) -> tuple[Instance, float]:
     inst = Instance(name=f"tiny-asym-{seed}", clusters=tuple(np.full((s, 2), np.nan) for s in sizes),
                     params=None, edge_weight_type="EXPLICIT", weights=w, symmetric=False)
     return inst, run_solver("brute", inst, None).objective
+
+
+def not_below(cost: float, optimum: float) -> bool:
+    """Whether ``cost`` is not below a proven ``optimum``, up to the rounding of sums taken in
+    another order (a relative 1e-9): what every heuristic's answer must satisfy."""
+    return cost >= optimum - 1e-9 * abs(optimum)
