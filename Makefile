@@ -47,8 +47,9 @@ bench-%: $(STAMP)
 
 # Every committed table and figure, regenerated: the benchmarks whose outputs results/ and docs/
 # hold (about 2 h 30 min on 2 cores, the sum of their full-run times in `gtsp-bench bench --list`;
-# a rerun re-uses every finished solve). glns-large's committed run is its first seed:
-# make bench-glns-large BENCH_ARGS="--seeds 1" (about 45 min on one core).
+# a rerun re-uses every finished solve). The three long ones are run on their own, with
+# make bench-NAME: glns-large (about 2 h 10 min on one core), exact-frontier-uav (3 h) and
+# exact-frontier (20 h, a few files at a time: docs/solvers/exact.md).
 BENCH_ALL = paper heuristics-table learned learned-transfer glns lns-effort scale textbook exact-scale
 bench-all: $(STAMP)
 	status=0; for b in $(BENCH_ALL); do \

@@ -162,6 +162,17 @@ def test_docs_blocks_are_on_the_pages_their_outputs_name():
             assert f"<!-- BEGIN generated:{name} -->" in text, f"{page} lacks the block {name} of {output}"
 
 
+def test_benchmarks_page_lists_every_docs_block():
+    """docs/benchmarks.md names every doc-* output in its table of outputs and gives its page and
+    block in the table of blocks (a new output is documented where users look it up)."""
+    text = (REPO / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+    rows = [line for line in text.splitlines() if line.startswith("| `doc-")]
+    for output, (page, block, _) in DOC_BLOCKS.items():
+        assert any(f"`{output}`" in r and "generated table" in r for r in rows), f"no {output}"
+        assert any(r.startswith(f"| `{output}` |") and page.removeprefix("docs/") in r
+                   and f"`{block}`" in r for r in rows), f"no page and block row for {output}"
+
+
 def test_results_index_names_every_committed_benchmark():
     """results/README.md has a line for each benchmark `make bench-all` regenerates (BENCH_ALL in the
     Makefile), naming its folder and its make target."""
