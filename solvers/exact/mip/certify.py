@@ -38,23 +38,20 @@ class CertificateError(RuntimeError):
 
 @dataclass(frozen=True)
 class RawProof:
-    """One LP's row duals (or Farkas ray) and the cuts it held.
+    """One LP's row duals (or Farkas ray), over its cuts of nonzero dual only.
 
     Attributes
     ----------
     kind
         ``"dual"`` or ``"farkas"``.
     duals
-        Per LP row: the cluster rows, the degree rows, then the cuts.
-    cuts
-        The LP's cuts at that solve.
+        The cluster rows', the degree rows', then those cuts' duals.
     ids
-        The log's id of each of those cut rows.
+        The log's id of each of those cuts (their rows are kept once in :attr:`ProofLog.cut_rows`).
     """
 
     kind: str
     duals: np.ndarray
-    cuts: Cuts
     ids: np.ndarray
 
 
@@ -79,15 +76,35 @@ class ProofLog:
     def __init__(self, model: GtspModel) -> None:
         self.model = model
         self.proofs: list[RawProof] = []
+        #: Each cut a proof uses, by id, as a one-row block: kept once, however many proofs use
+        #: it (a proof holding the LP's whole cut block took 18 GB over a 3,600 s search of
+        #: 200E1k.0, and more at 207si1032).
+        self.cut_rows: dict[int, Cuts] = {}
         self.nodes: list[_Node] = [_Node(None, None)]
         self.best_root: tuple[float, int] | None = None
         self.root_fixed: list[np.ndarray] = []  # the columns each root fixing fixed
 
     # -------------------------------------------------------------- recording
     def proof(self, kind: str, duals: np.ndarray, cuts: Cuts, ids: np.ndarray) -> int:
-        """Record one LP's duals (or Farkas ray); its index."""
-        self.proofs.append(RawProof(kind, np.array(duals, dtype=float), cuts, ids))
+        """Record one LP's duals (or Farkas ray) over its base rows and ``cuts`` (ids ``ids``);
+        its index. A cut of zero dual adds nothing to the proof and is not kept."""
+        base = self.model.n_clusters + self.model.n_nodes
+        duals = np.asarray(duals, dtype=float)
+        used = np.flatnonzero(duals[base:] != 0)
+        new = [r for r in used if int(ids[r]) not in self.cut_rows]
+        if new:
+            block = cuts.select(np.isin(np.arange(len(cuts)), new))
+            for j, r in enumerate(new):
+                self.cut_rows[int(ids[r])] = block.select(np.arange(len(block)) == j)
+        self.proofs.append(RawProof(kind, np.concatenate([duals[:base], duals[base:][used]]),
+                                    np.asarray(ids)[used].copy()))
         return len(self.proofs) - 1
+
+    def _cuts(self, proof: RawProof) -> Cuts:
+        """The cuts of ``proof``'s duals, in their order."""
+        if not len(proof.ids):
+            return Cuts.empty(self.model.n_nodes)
+        return Cuts.stack([self.cut_rows[int(i)] for i in proof.ids])
 
     def root_round(self, bound: float, proof: int, fixed: np.ndarray | None = None) -> None:
         """A root LP round: its bound (kept if the best) and the model columns it fixed, if any."""
@@ -229,7 +246,7 @@ class ProofLog:
         u, pi, mu = proof.duals[:m], proof.duals[m:m + n], proof.duals[m + n:]
         is_y = cols < n
         ys, es = cols[is_y], cols[~is_y] - n
-        on_edge, on_y = proof.cuts.dual_weights(model, mu, es)
+        on_edge, on_y = self._cuts(proof).dual_weights(model, mu, es)
         rc = np.empty(len(cols))
         rc[is_y] = model.cost[ys] - u[model.cluster[ys]] + 2 * pi[ys] - on_y[ys]
         rc[~is_y] = model.cost[n + es] - pi[model.tail[es]] - pi[model.head[es]] - on_edge
@@ -274,7 +291,7 @@ class ProofLog:
         for r in np.flatnonzero(np.round(mu * scale) != 0):
             cid = int(raw.ids[r])
             if cid not in cache:
-                fam, alpha, crossing = self._family(raw.cuts, int(r))
+                fam, alpha, crossing = self._family(self.cut_rows[cid], 0)
                 cut_index[cid] = len(cuts_out)
                 cuts_out.append(fam)
                 cache[cid] = (cut_index[cid], alpha, crossing)

@@ -70,6 +70,36 @@ def test_cut_rows_become_family_members(seed: int) -> None:
                 0 if family["family"] == "gsec" else len(family["handle"]) + (len(family["teeth"]) - 1) // 2)
 
 
+def test_a_proof_keeps_its_cuts_of_nonzero_dual_once() -> None:
+    """A logged proof holds the duals of its base rows and of its cuts of nonzero dual only; each
+    cut's row is kept once, by id, however many proofs use it, and the reduced costs it gives are
+    those of the whole LP's duals."""
+    problem = price(generate_instance(6, 3, seed=1), 0.5)
+    model = build_model(problem, problem.clusters)
+    rng = np.random.default_rng(1)
+    cuts = Cuts.stack([subtour_cut(model, rng.random(model.n_nodes) < 0.5, 0, 1 + k % 5)
+                       for k in range(6)])
+    ids = np.array([10, 11, 12, 13, 14, 15])
+    base = model.n_clusters + model.n_nodes
+    duals = rng.normal(size=base + len(cuts))
+    duals[base + np.array([1, 4])] = 0.0  # two cuts of zero dual
+    log = ProofLog(model)
+    raw = log.proofs[log.proof("dual", duals, cuts, ids)]
+    kept = dict(log.cut_rows)
+    log.proof("dual", duals, cuts, ids)  # the same cuts again: nothing new is kept
+    assert list(raw.ids) == [10, 12, 13, 15] and sorted(log.cut_rows) == [10, 12, 13, 15]
+    assert all(log.cut_rows[i] is kept[i] for i in kept)
+    assert np.array_equal(raw.duals, np.delete(duals, base + np.array([1, 4])))
+    assert np.array_equal(log._cuts(raw).matrix(model, np.arange(model.n_cols)),
+                          cuts.select(np.isin(ids, raw.ids)).matrix(model, np.arange(model.n_cols)))
+    cols = np.arange(model.n_cols)
+    whole = ProofLog(model)
+    whole.cut_rows = {int(i): cuts.select(ids == i) for i in ids}
+    everything = type(raw)("dual", duals, ids)
+    assert np.allclose(log._reduced_costs(raw, cols), whole._reduced_costs(everything, cols),
+                       rtol=0, atol=1e-12)
+
+
 def test_a_row_of_no_family_is_refused() -> None:
     cluster = np.array([0, 0, 1, 1, 2, 2])
     q = np.array([True, False, True, False, False, False])
