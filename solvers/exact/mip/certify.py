@@ -2,8 +2,8 @@
 
 :class:`ProofLog` records, while the search runs, the dual vector of every LP that proves
 something (the root's best bound, each reduced-cost fixing round, each leaf, each child shown
-empty by strong branching) together with the cuts in the LP at that moment, and the tree (which
-variable each node branched on). :meth:`ProofLog.certificate` turns it into the format of
+empty by strong branching) together with its cuts of nonzero dual (each cut's row kept once), and
+the tree (which variable each node branched on). :meth:`ProofLog.certificate` turns it into the format of
 :mod:`gtsp_bench.proof.format`: each LP cut row becomes a member of a named family
 (:mod:`gtsp_bench.proof.families`) with its defining sets. The LP holds a cut in a form shifted by
 equalities (a side written over its crossing edges adds degree rows; a right-hand side of ``-1``
