@@ -6,6 +6,7 @@ from functools import cache
 
 import numpy as np
 
+from gtsp_bench.checks import strictly_better
 from gtsp_bench.generator import generate_instance
 from gtsp_bench.instance import Instance
 from gtsp_bench.registry import run_solver
@@ -43,6 +44,7 @@ def tiny_asymmetric_case(seed: int) -> tuple[Instance, float]:
 
 
 def not_below(cost: float, optimum: float) -> bool:
-    """Whether ``cost`` is not below a proven ``optimum``, up to the rounding of sums taken in
-    another order (a relative 1e-9): what every heuristic's answer must satisfy."""
-    return cost >= optimum - 1e-9 * abs(optimum)
+    """Whether ``cost`` is not below a proven ``optimum`` by the package's own rule
+    (:func:`gtsp_bench.checks.strictly_better`: a relative 1e-9, for the rounding of sums taken in
+    another order): what every heuristic's answer must satisfy."""
+    return not strictly_better(cost, optimum)
