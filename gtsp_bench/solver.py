@@ -40,10 +40,13 @@ is set (a benchmark's worker processes set it), at most :func:`usable_cores`
 from __future__ import annotations
 
 import inspect
+import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
 
 from gtsp_bench.energy import Energy
 from gtsp_bench.instance import Instance
@@ -177,6 +180,23 @@ class BatchSolver(Solver, Protocol):
         ...
 
 
+def plain(value: Any) -> Any:
+    """``value`` in JSON's types: numpy scalars and arrays as numbers and lists, tuples as
+    lists, mapping keys as strings, a float that is not finite as ``None``, anything else as its
+    ``str``."""
+    if isinstance(value, Mapping):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    return str(value)
+
+
 def solves_batches(solver: object) -> bool:
     """Whether a solver (object or class) defines ``solve_batch``."""
     return callable(getattr(solver, "solve_batch", None))
@@ -219,6 +239,7 @@ class Result:
             "lower_bound": self.lower_bound,
             "runtime_s": self.runtime_s,
             "trajectory": [p.to_dict() for p in self.trajectory],
+            "stats": plain(self.stats),
         }
 
     def summary(self) -> str:

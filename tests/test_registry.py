@@ -3,8 +3,10 @@ checks on what solvers claim."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -146,8 +148,25 @@ def test_result_json_shape(tiny):
     """to_dict has exactly the CLI's keys."""
     d = run_solver(Fixed(), tiny, 0.5).to_dict()
     assert list(d) == ["instance", "solver", "omega", "order", "heads", "objective", "energy",
-                       "distance", "status", "lower_bound", "runtime_s", "trajectory"]
+                       "distance", "status", "lower_bound", "runtime_s", "trajectory", "stats"]
     assert list(d["energy"]) == ["total", "ground", "flight", "hover"]
+
+
+def test_result_json_carries_the_solvers_stats_in_json_types(tiny):
+    """A solver's stats reach ``to_dict`` as plain JSON: numpy numbers as numbers, arrays and
+    tuples as lists, a float that is not finite as null, anything else as its text."""
+    import json
+
+    class WithStats(Fixed):
+        def solve(self, instance, omega, *, time_limit=None, seed=0):
+            sol = super().solve(instance, omega, time_limit=time_limit, seed=seed)
+            stats = {"n": np.int64(3), "x": np.float32(0.5), "gap": float("inf"), "path": Path("a"),
+                     "trace": [{"t": np.float64(1.5), "v": (1, 2)}], 7: np.arange(2)}
+            return dataclasses.replace(sol, stats=stats)
+
+    d = run_solver(WithStats(), tiny, 0.5).to_dict()
+    assert json.loads(json.dumps(d, allow_nan=False))["stats"] == {
+        "n": 3, "x": 0.5, "gap": None, "path": "a", "trace": [{"t": 1.5, "v": [1, 2]}], "7": [0, 1]}
 
 
 def test_bench_flag():

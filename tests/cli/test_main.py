@@ -16,7 +16,7 @@ from gtsp_bench.cli import main
 from tests.conftest import GTSPLIB, REPO
 
 KEYS = ["instance", "solver", "omega", "order", "heads", "objective", "energy", "distance",
-        "status", "lower_bound", "runtime_s", "trajectory"]
+        "status", "lower_bound", "runtime_s", "trajectory", "stats"]
 
 
 @pytest.fixture
@@ -46,6 +46,7 @@ def test_solve_json_shape(capsys, k4):
     assert set(data["energy"]) == {"total", "ground", "flight", "hover"}
     assert data["objective"] == data["energy"]["total"]
     assert data["lower_bound"] == pytest.approx(data["objective"])
+    assert isinstance(data["stats"], dict)
 
 
 def test_solve_then_evaluate_round_trip(capsys, k4, tmp_path):

@@ -273,6 +273,7 @@ class HighsBackend:
         self.stalls = 0  # runs stopped by the iteration limit and restarted
         self.retries = 0  # runs that ended otherwise than solved, infeasible, cut off or out of time
         self.cold_starts = 0  # LPs solved from no basis by request (:meth:`start_cold`)
+        self.iterations = 0  # simplex iterations over all runs
         self._cold = False
 
     def add_cols(self, cost: np.ndarray, entries: sp.csc_array) -> None:
@@ -338,6 +339,7 @@ class HighsBackend:
             _SCHEDULER["threads"] = self.threads
         self.h.setOptionValue("simplex_iteration_limit", int(iteration_limit))
         self.h.run()
+        self.iterations += self.h.getInfo().simplex_iteration_count
         return self.h.getModelStatus()
 
     def _interior(self) -> Any:

@@ -155,6 +155,7 @@ class _Search:
                  progress: Progress = no_progress, certify: bool = False) -> None:
         self.problem, self.options, self.deadline, self.stats = problem, options, deadline, stats
         self.progress = progress
+        self.start = time.perf_counter()
         self.model = model = build_model(problem, kept)
         stats["nodes"], stats["edges"] = model.n_nodes, len(model.tail)
         threads = options.lp_threads() if model.n_nodes >= BIG_ROOT_NODES else 1
@@ -206,6 +207,18 @@ class _Search:
         k, done = ROOT_FLAT_ROUNDS, self.stats.get("root_rounds", 0) + len(bounds)
         return (0 < k < len(bounds) and done > ROOT_FLAT_AFTER
                 and self.lb - bounds[-1 - k] < ROOT_FLAT_SHARE * (self.ub - self.lb))
+
+    def trace_round(self, objective: float, bound: float) -> None:
+        """Add a root round to ``stats["root_trace"]``: seconds since the search began, the LP's
+        objective and the round's Lagrangian bound, the LP and separation seconds and simplex
+        iterations so far, and the LP's cuts and columns."""
+        lp = self.lp
+        self.stats.setdefault("root_trace", []).append({
+            "time_s": round(time.perf_counter() - self.start, 4), "lp": objective, "bound": bound,
+            "lp_s": round(self.stats.get("lp_s", 0.0), 4),
+            "separation_s": round(self.stats.get("separation_s", 0.0), 4),
+            "iterations": getattr(lp.backend, "iterations", None), "cuts": len(lp.cuts),
+            "cols": len(lp.cols)})
 
     @property
     def proven(self) -> bool:
@@ -273,6 +286,7 @@ class _Search:
             self.lb = max(self.lb, bound)
             self.report()
             bounds.append(self.lb)
+            self.trace_round(res.objective, bound)
             if self.proven or self.left() <= 0 or self._root_flat(bounds):
                 break
             if drops:  # edge columns long priced out leave (priced back in when negative)

@@ -85,7 +85,8 @@ def solve_exact(
     Solution
         Status ``"optimal"`` with ``lower_bound`` when proven, else ``"time_limit"`` with the best
         tour and the best lower bound known (at least :func:`degree_bound`). ``stats`` has seconds per
-        phase, rounds, cuts and backend counters.
+        phase, rounds, cuts, backend counters and ``root_trace``, a record per root round
+        (:meth:`~gtsp_bench.solvers.exact.mip.branch_cut._Search.trace_round`).
 
     Raises
     ------
@@ -156,6 +157,7 @@ def solve_exact(
             search.branch_and_cut()
     stats["lp_cols"], stats["cuts"] = len(search.lp.cols), len(search.lp.cuts)
     stats["lp_stalls"] = getattr(search.lp.backend, "stalls", 0)
+    stats["lp_iterations"] = getattr(search.lp.backend, "iterations", None)
     stats["lp_retries"] = getattr(search.lp.backend, "retries", 0)
     stats["lp_cold_starts"] = getattr(search.lp.backend, "cold_starts", 0)
     if certificate is not None:

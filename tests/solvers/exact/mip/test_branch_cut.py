@@ -87,6 +87,22 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
     assert r.stats["root_rounds"] >= 1
 
 
+def test_the_root_trace_has_a_record_per_root_round():
+    """``stats["root_trace"]``: one record per root round, its times, seconds and simplex
+    iterations never falling, each below the solve's totals, and its best bound the root's."""
+    r = run_solver("milp", read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None, time_limit=60.0)
+    trace = r.stats["root_trace"]
+    assert len(trace) == r.stats["root_rounds"] >= 2
+    for key in ("time_s", "lp_s", "separation_s", "iterations"):
+        column = [t[key] for t in trace]
+        assert column == sorted(column), key
+    last = trace[-1]
+    assert last["lp_s"] + last["separation_s"] <= last["time_s"] <= r.stats["total_s"]
+    assert 0 < last["iterations"] <= r.stats["lp_iterations"]
+    assert max(t["bound"] for t in trace) == pytest.approx(r.stats["root_bound"])
+    assert all(t["bound"] <= t["lp"] + 1e-9 for t in trace) and last["cuts"] > 0
+
+
 @pytest.mark.parametrize("dive", [True, False])
 def test_a_node_after_a_jump_starts_cold(dive, monkeypatch):
     """A K = 16 instance left to the branch and cut (two root rounds, greedy tour), every jump
