@@ -33,7 +33,7 @@ import pandas as pd
 from gtsp_bench.bench.best_known import best_known_output
 from gtsp_bench.bench.definitions import Benchmark
 from gtsp_bench.bench.rows import HIT_GAP_PCT
-from gtsp_bench.data.io import atomic_write_text
+from gtsp_bench.data.io import atomic_write_csv, atomic_write_text
 
 Output = Callable[[Benchmark, pd.DataFrame, Path, Any, Callable[[str], None]], list[Path]]
 
@@ -48,7 +48,7 @@ def _profile(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, s
     from gtsp_bench.report.figures import save_png
 
     prof = profiles.performance_profile(_as_sweep(df))
-    atomic_write_text(out_dir / "profile.csv", prof.to_csv(index=False, float_format="%.10g"))
+    atomic_write_csv(out_dir / "profile.csv", prof)
     save_png(profiles.profile_figure(prof), out_dir / "profile.png")
     return [out_dir / "profile.csv", out_dir / "profile.png"]
 
@@ -61,7 +61,7 @@ def _gap_k(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, say
     if sweep.loc[sweep["gap_percent"].notna(), "K"].nunique() < 2:
         return []
     table = profiles.gap_by_k(sweep)
-    atomic_write_text(out_dir / "gap-k.csv", table.to_csv(index=False, float_format="%.10g"))
+    atomic_write_csv(out_dir / "gap-k.csv", table)
     save_png(profiles.gap_k_figure(table), out_dir / "gap-k.png")
     return [out_dir / "gap-k.csv", out_dir / "gap-k.png"]
 
@@ -71,7 +71,7 @@ def _anytime(bench: Benchmark, df: pd.DataFrame, out_dir: Path, settings: Any, s
     from gtsp_bench.report.figures import save_png
 
     table = profiles.anytime_table(df)
-    atomic_write_text(out_dir / "anytime.csv", table.to_csv(index=False, float_format="%.10g"))
+    atomic_write_csv(out_dir / "anytime.csv", table)
     save_png(profiles.time_to_target_figure(df), out_dir / "time-to-target.png")
     return [out_dir / "anytime.csv", out_dir / "time-to-target.png"]
 

@@ -13,7 +13,6 @@ function of the rows alone, so :func:`render` redraws them from a committed ``ro
 from __future__ import annotations
 
 import datetime as dt
-import json
 import os
 import platform
 import subprocess
@@ -35,7 +34,7 @@ from gtsp_bench.bench.rows import (
     summary_markdown,
     summary_table,
 )
-from gtsp_bench.data.io import atomic_write_text
+from gtsp_bench.data.io import atomic_write_csv, atomic_write_json, atomic_write_text
 
 #: Packages whose versions the manifest records (those installed).
 PACKAGES = (
@@ -154,10 +153,10 @@ def write_core(
         out_dir / "summary.md",
         out_dir / "manifest.json",
     )
-    atomic_write_text(rows_path, df.to_csv(index=False, float_format="%.10g"))
+    atomic_write_csv(rows_path, df)
     text = summary_markdown(summary_table(df))
     atomic_write_text(summary_path, f"# {bench.name}\n\n{bench.description}.\n\n{text}")
-    atomic_write_text(manifest_path, json.dumps(manifest(bench, command, instances, extra), indent=1) + "\n")
+    atomic_write_json(manifest_path, manifest(bench, command, instances, extra))
     return [rows_path, summary_path, manifest_path], text
 
 

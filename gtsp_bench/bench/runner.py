@@ -61,7 +61,7 @@ from gtsp_bench.bench.tasks import (
     task_key,
 )
 from gtsp_bench.checks import parse_ks, parse_names
-from gtsp_bench.data.io import atomic_write_text
+from gtsp_bench.data.io import atomic_write_csv
 from gtsp_bench.errors import InputError
 from gtsp_bench.generator import DEFAULT_ZETA, check_generator_args
 from gtsp_bench.report.paper import (
@@ -433,7 +433,7 @@ def write_outputs(config: BenchConfig, sets: Mapping[int, list[StoredInstance]],
         else:
             df = experiment_rows(config, exp, sets, records)
             fig = figures.experiment_figure(exp, df, {k: s[0].instance for k, s in sets.items()})
-        atomic_write_text(csv_path, df.to_csv(index=False, float_format="%.10g"))
+        atomic_write_csv(csv_path, df)
         figures.save_png(fig, png_path)
         summary.written += [csv_path, png_path]
     path = write_report(config.out_dir, config.checkpoint_dir, config.jobs)

@@ -181,13 +181,11 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
     """Measure a finished run's rows against today's reference tables
     (:func:`~gtsp_bench.bench.rereference.rereference`), record it in the manifest and redraw its
     outputs (:func:`report_only`)."""
-    import json
-
     from gtsp_bench.bench.engine import configure
     from gtsp_bench.bench.output_kinds import read_manifest
     from gtsp_bench.bench.rereference import Tables, rereference
     from gtsp_bench.bench.rows import read_rows, summary_markdown, summary_table
-    from gtsp_bench.data.io import atomic_write_text
+    from gtsp_bench.data.io import atomic_write_json, atomic_write_text, csv_text
 
     bench = configure(name, settings)  # type: ignore[arg-type]
     if bench.planner == "paper":
@@ -203,7 +201,7 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
         raise InputError(f"{out_dir / 'rows.csv'}: {e}") from None
     for set_name in done.missing:
         print(f"warning: {set_name}: no such set here; its rows keep their references", file=sys.stderr)
-    text = done.rows.to_csv(index=False, float_format="%.10g")
+    text = csv_text(done.rows)
     if text == (out_dir / "rows.csv").read_text():  # nothing to write or redraw
         print(f"{out_dir / 'rows.csv'}: every row already measured against today's references",
               file=sys.stderr)
@@ -217,7 +215,7 @@ def re_reference(name: str, settings: object) -> tuple[int, str]:
                 re_referenced=last["re_referenced"] + done.changed,
                 renamed=last["renamed"] + done.renamed)
     atomic_write_text(out_dir / "rows.csv", text)
-    atomic_write_text(out_dir / "manifest.json", json.dumps(manifest, indent=1) + "\n")
+    atomic_write_json(out_dir / "manifest.json", manifest)
     print(f"re-referenced {out_dir / 'rows.csv'}: {done.changed} of {len(old)} rows measured "
           f"against a new reference value, {done.renamed} against the same value of a new kind "
           "or source", file=sys.stderr)
@@ -242,12 +240,10 @@ def check_merge(name: str, settings: object, target: Path) -> None:
 def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
     """Fold a finished run's rows into ``target``'s (:func:`~gtsp_bench.bench.rows.merge_rows`),
     record the command in its manifest and redraw its outputs (:func:`report_only`)."""
-    import json
-
     from gtsp_bench.bench.engine import configure
     from gtsp_bench.bench.output_kinds import read_manifest
     from gtsp_bench.bench.rows import merge_rows, read_rows
-    from gtsp_bench.data.io import atomic_write_text
+    from gtsp_bench.data.io import atomic_write_csv, atomic_write_json
 
     run_dir = Path(configure(name, settings).output_dir)  # type: ignore[arg-type]
     new, old = read_rows(run_dir / "rows.csv"), read_rows(target / "rows.csv")
@@ -261,8 +257,8 @@ def merge_into(name: str, settings: object, target: Path) -> tuple[int, str]:
         "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
         **{k: run.get(k) for k in ("git_commit", "git_dirty", "cpu_model")},
         "replaced": replaced, "added": added})
-    atomic_write_text(target / "rows.csv", merged.to_csv(index=False, float_format="%.10g"))
-    atomic_write_text(target / "manifest.json", json.dumps(manifest, indent=1) + "\n")
+    atomic_write_csv(target / "rows.csv", merged)
+    atomic_write_json(target / "manifest.json", manifest)
     print(f"merged into {target / 'rows.csv'}: {replaced} rows replaced, {added} added",
           file=sys.stderr)
     return report_only(name, settings.whole(target))  # type: ignore[attr-defined]

@@ -8,11 +8,13 @@ written transparently, its format named by the suffix before ``.gz``.
 from __future__ import annotations
 
 import gzip
+import json
 import os
 import secrets
 import zlib
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from gtsp_bench.data.parse import (
     format_gtsp,
@@ -210,6 +212,21 @@ def _write_text(p: Path, text: str) -> None:
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` so that readers see the old file or the whole new one."""
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def csv_text(table: Any) -> str:
+    """A pandas table as the suite writes every CSV: no index, floats to 10 significant digits."""
+    return str(table.to_csv(index=False, float_format="%.10g"))
+
+
+def atomic_write_csv(path: str | os.PathLike[str], table: Any) -> None:
+    """Write a pandas table as :func:`csv_text` atomically (:func:`atomic_write_text`)."""
+    atomic_write_text(path, csv_text(table))
+
+
+def atomic_write_json(path: str | os.PathLike[str], data: Any) -> None:
+    """Write ``data`` as indented JSON with a final newline, atomically (a run's manifest)."""
+    atomic_write_text(path, json.dumps(data, indent=1) + "\n")
 
 
 def _create_temp(folder: Path, name: str) -> tuple[int, str]:

@@ -12,6 +12,8 @@ import pytest
 
 from gtsp_bench.data import gtsplib
 from gtsp_bench.data.io import (
+    atomic_write_csv,
+    atomic_write_json,
     atomic_write_text,
     format_suffix,
     read_instance,
@@ -89,6 +91,25 @@ def test_atomic_write_leaves_no_temporary_files(tmp_path):
     atomic_write_text(target, "two")
     assert target.read_text() == "two"
     assert [p.name for p in target.parent.iterdir()] == ["out.txt"]
+
+
+def test_tables_and_manifests_round_trip_in_the_suites_format(tmp_path):
+    """A table is written without its index, floats to 10 significant digits, and reads back; a
+    manifest is indented JSON ending in a newline; neither leaves a temporary file."""
+    import json
+
+    import pandas as pd
+
+    table = pd.DataFrame({"instance": ["a", "b"], "objective": [1 / 3, 2.0], "K": [5, 7]})
+    atomic_write_csv(tmp_path / "rows.csv", table)
+    assert (tmp_path / "rows.csv").read_text() == "instance,objective,K\na,0.3333333333,5\nb,2,7\n"
+    back = pd.read_csv(tmp_path / "rows.csv")
+    assert back["objective"].tolist() == pytest.approx([1 / 3, 2.0], rel=1e-9)
+    atomic_write_json(tmp_path / "manifest.json", {"merges": [{"added": 1}]})
+    text = (tmp_path / "manifest.json").read_text()
+    assert text.endswith("}\n") and json.loads(text) == {"merges": [{"added": 1}]}
+    assert "\n " in text  # indented
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["manifest.json", "rows.csv"]
 
 
 def test_atomic_write_gives_ordinary_permissions(tmp_path):
