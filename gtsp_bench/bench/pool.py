@@ -43,7 +43,7 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Any
 
-from gtsp_bench.solver import SOLVE_THREADS_VAR, usable_cores
+from gtsp_bench.solver import SOLVE_THREADS_VAR, plain, usable_cores
 
 #: Seconds a worker may take to import and build its solver.
 INIT_TIMEOUT_S = 300.0
@@ -79,12 +79,6 @@ def one_line(e: BaseException) -> str:
     """``"Type: message"`` of an exception, its first line, at most 300 characters."""
     text = f"{type(e).__name__}: {e}"
     return (text.splitlines() or [text])[0][:300]
-
-
-def _plain(stats: Mapping[str, Any]) -> dict[str, Any]:
-    """Solver statistics made JSON-safe (numbers, strings, booleans, None; others as text)."""
-    return {str(k): v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
-            for k, v in stats.items()}
 
 
 def _limit_threads() -> None:
@@ -187,7 +181,7 @@ def _record(res: Any) -> dict[str, Any]:
         "ground_J": e.ground if e else math.nan, "flight_J": e.flight if e else math.nan,
         "hover_J": e.hover if e else math.nan, "distance_m": res.distance,
         "runtime_s": res.runtime_s, "order": list(res.order), "heads": list(res.heads),
-        "note": "", "stats": _plain(res.stats),
+        "note": "", "stats": plain(res.stats),
         # each improvement as [seconds, objective, lower bound or null]; the last is the answer
         "trajectory": [[p.time_s, p.objective, p.lower_bound] for p in res.trajectory],
     }

@@ -149,6 +149,16 @@ def test_solve_message_record_carries_the_trajectory():
     assert "trajectory" not in solve_message(Crash(), "crash", _msg(0.4), {})
 
 
+def test_a_records_stats_keep_their_structure_in_json_types():
+    """milp's stats reach the record as JSON: its root trace a list of records, not text."""
+    from gtsp_bench.solvers.exact.milp import Milp
+
+    rec = solve_message(Milp(), "milp", {**_msg(0.4, generate_instance(6, 4, seed=2)),
+                                         "time_limit": 30.0}, {})
+    trace = json.loads(json.dumps(rec["stats"], allow_nan=False))["root_trace"]
+    assert isinstance(trace, list) and trace and {"time_s", "bound", "cuts"} <= set(trace[0])
+
+
 def test_solve_threads_share_the_cores_among_the_workers():
     """A solve may run the cores over the workers, at least one."""
     assert solve_threads(1, cores=2) == 2 and solve_threads(2, cores=2) == 1
