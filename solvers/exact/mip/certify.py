@@ -93,7 +93,9 @@ class ProofLog:
         used = np.flatnonzero(duals[base:] != 0)
         new = [r for r in used if int(ids[r]) not in self.cut_rows]
         if new:
-            block = cuts.select(np.isin(np.arange(len(cuts)), new))
+            mask = np.zeros(len(cuts), dtype=bool)
+            mask[new] = True
+            block = cuts.select(mask)
             for j, r in enumerate(new):
                 self.cut_rows[int(ids[r])] = block.select(np.arange(len(block)) == j)
         self.proofs.append(RawProof(kind, np.concatenate([duals[:base], duals[base:][used]]),
