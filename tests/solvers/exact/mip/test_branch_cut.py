@@ -76,12 +76,21 @@ def test_solver_defaults_are_the_option_defaults(solver):
 def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
     """With the root's share of the limit at zero the first root loop pauses before its first
     round; after the restarts it goes on, and the solve still proves the brute-force optimum."""
-    from gtsp_bench.solvers.exact.mip import branch_cut
+    from gtsp_bench.solvers.exact.mip import branch_cut, solve
     from gtsp_bench.solvers.exact.mip.backends import HighsBackend
 
-    monkeypatch.setattr(branch_cut, "ROOT_SHARE", 0.0)
+    paused: list[bool] = []
+    root = branch_cut._Search.root
+
+    def spy(self, until=None):
+        paused.append(root(self, until))
+        return paused[-1]
+
+    monkeypatch.setattr(solve, "ROOT_SHARE", 0.0)  # the name solve_exact reads
+    monkeypatch.setattr(branch_cut._Search, "root", spy)
     inst = _instance(seed, 6, [3, 2, 3, 1, 2, 3], True)
     r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(), time_limit=60.0)
+    assert paused == [True, False]  # paused before its first round, then went on to the end
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("brute", inst, 0.5).objective, rel=1e-9)
     assert r.stats["root_rounds"] >= 1
