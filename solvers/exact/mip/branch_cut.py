@@ -32,8 +32,6 @@ from gtsp_bench.solver import Progress, no_progress
 
 #: Columns priced into the root LP per round, per node.
 PRICE_PER_NODE = 2
-#: Largest share of the time limit that pruning may take.
-PRUNE_SHARE = 0.2
 #: Most dual simplex iterations of a strong-branching LP: one stopped there scores its child by the
 #: objective reached (a guide, never a bound). At UAV K = 50 a full strong LP took 3,000-6,000
 #: iterations (2-4 s), 16 of them a node.
@@ -46,11 +44,6 @@ DIVE_SHARE = 0.3
 #: UAV K = 50, omega 0.9, 600 s: 6 of 11 such LPs, and 16 of 23 started from the parent's stored
 #: basis, stalled in the dual simplex (5,000 iterations, then the interior point method anyway).
 JUMP_BOUNDS = 20
-#: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
-RESTART_SHARE = 0.05
-#: Share of the time limit after which an unfinished first root loop pauses for the restarts
-#: (then goes on): at K = 100 it would otherwise run to the limit with the first tour.
-ROOT_SHARE = 0.05
 #: The root loop ends (tails off) when its LP value rose by less than ``ROOT_TAIL`` of it over its
 #: last ``ROOT_TAIL_ROUNDS`` rounds without columns to price in.
 ROOT_TAIL, ROOT_TAIL_ROUNDS = 1e-5, 5

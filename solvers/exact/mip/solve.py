@@ -18,14 +18,7 @@ from typing import Any
 import numpy as np
 from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend
-from gtsp_bench.solvers.exact.mip.branch_cut import (
-    PRUNE_SHARE,
-    RESTART_SHARE,
-    ROOT_SHARE,
-    _Search,
-    _Timer,
-    check_symmetric,
-)
+from gtsp_bench.solvers.exact.mip.branch_cut import _Search, _Timer, check_symmetric
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
@@ -38,6 +31,13 @@ from gtsp_bench.problem import Problem, price
 from gtsp_bench.proof.format import write_certificate
 from gtsp_bench.solver import Progress, Solution, no_progress
 
+#: Largest share of the time limit that pruning may take.
+PRUNE_SHARE = 0.2
+#: Share of the time limit for LNS restarts when the root did not prove the incumbent optimal.
+RESTART_SHARE = 0.05
+#: Share of the time limit after which an unfinished first root loop pauses for the restarts
+#: (then goes on): at K = 100 it would otherwise run to the limit with the first tour.
+ROOT_SHARE = 0.05
 #: A float-cost certificate's cutoff lies this share of the value below the proven bound (room
 #: for the rounding between the LP's float bound and the checker's exact one).
 CUTOFF_MARGIN = 1e-9

@@ -86,7 +86,7 @@ def test_a_root_paused_for_the_restarts_goes_on_to_the_proof(seed, monkeypatch):
         paused.append(root(self, until))
         return paused[-1]
 
-    monkeypatch.setattr(solve, "ROOT_SHARE", 0.0)  # the name solve_exact reads
+    monkeypatch.setattr(solve, "ROOT_SHARE", 0.0)
     monkeypatch.setattr(branch_cut._Search, "root", spy)
     inst = _instance(seed, 6, [3, 2, 3, 1, 2, 3], True)
     r = solve_exact(price(inst, 0.5), HighsBackend, MipOptions(), time_limit=60.0)
