@@ -28,12 +28,12 @@ class Gurobi(MipSolver):
     def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False,
                  certificate: str | None = None, threads: int | None = None,
-                 branching: str = "auto") -> None:
+                 branching: str = "auto", workers: int | None = None) -> None:
         import_gurobipy()
         # (a certificate is refused at the solve: Gurobi's own search logs no proof; after the
-        # root Gurobi branches itself, so ``branching`` is checked but not used)
+        # root Gurobi branches itself, so ``branching`` and ``workers`` are checked but not used)
         super().__init__(prune, lns_trials, root_rounds, core_edges, abs_gap, verbose, certificate,
-                         threads, branching)
+                         threads, branching, workers)
 
     def backend(self, options: MipOptions) -> GurobiBackend:
         """A new, empty Gurobi backend."""

@@ -38,7 +38,8 @@ of the GTSP):
    the backend as LP solver: best first with bounded dives, the same cuts, pricing and
    reduced-cost fixing at every node, strong branching on ``y`` first (reliability branching
    once the strong-branching LPs mostly stop at their cap; a child shown empty fixes the column
-   at the node instead). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
+   at the node instead), by two workers where two cores are free (``workers``: threads taking
+   the best open nodes, each with its own LP). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
    every column not fixed, adding subtour rows from a callback.
 
 Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20
@@ -63,10 +64,16 @@ Modules, each importing only the ones above it:
 * :mod:`~gtsp_bench.solvers.exact.mip.branching`: pseudo-costs and reliability branching
   (:class:`PseudoCosts`, :func:`choose`), independent of the backend;
 * :mod:`~gtsp_bench.solvers.exact.mip.tree`: the open nodes (column fixes per model column);
+* :mod:`~gtsp_bench.solvers.exact.mip.workers`: the incumbent and the open nodes that the branch
+  and cut's workers share (each thread with its own copy of the LP);
 * :mod:`~gtsp_bench.solvers.exact.mip.columns`: columns leaving the node LPs once their reduced
   cost has stayed large, and the column bounds that move the LP from one node to another;
-* :mod:`~gtsp_bench.solvers.exact.mip.branch_cut`: the search (root loop, own branch and cut,
-  the backend's lazy MILP), :func:`solve_exact` and :class:`MipSolver`, the base of the ``milp``
-  and ``gurobi`` solvers (:mod:`gtsp_bench.solvers.exact.milp`,
+* :mod:`~gtsp_bench.solvers.exact.mip.certify`: the proof log and the certificate it becomes;
+* :mod:`~gtsp_bench.solvers.exact.mip.tree_search`: the branch and cut after the root, on one
+  worker or more;
+* :mod:`~gtsp_bench.solvers.exact.mip.branch_cut`: the search's state, its root loop and the
+  backend's lazy MILP;
+* :mod:`~gtsp_bench.solvers.exact.mip.solve`: :func:`solve_exact` and :class:`MipSolver`, the base
+  of the ``milp`` and ``gurobi`` solvers (:mod:`gtsp_bench.solvers.exact.milp`,
   :mod:`gtsp_bench.solvers.exact.gurobi`).
 """

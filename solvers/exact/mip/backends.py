@@ -9,6 +9,7 @@ process with ortools; gurobipy is an optional extra).
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -184,6 +185,16 @@ class LpModel:
         backend.add_rows(base.tocsr(), rhs, rhs)
         self.add_cols(cols)
 
+    def copy(self, first_id: int) -> LpModel:
+        """A copy in a copy of the backend (:meth:`HighsBackend.copy`), its new cuts numbered
+        from ``first_id`` on (a tree worker's own range: the proof log keeps a cut by its id)."""
+        twin = copy.copy(self)
+        twin.backend = self.backend.copy()  # type: ignore[attr-defined]
+        for name in ("cols", "slack_age", "col_age", "cut_ids"):
+            setattr(twin, name, getattr(self, name).copy())
+        twin._next_id = max(self._next_id, first_id)
+        return twin
+
     def add_cols(self, cols: np.ndarray) -> None:
         """Add model columns ``cols`` with their coefficients in the base rows and cuts."""
         base, _ = self.model.base_rows(cols)
@@ -267,6 +278,7 @@ class HighsBackend:
         import highspy
 
         self._hs = highspy
+        self.options = options
         self.h = highspy.Highs()
         self.h.setOptionValue("output_flag", options.verbose)
         self.use_threads(1)
@@ -307,12 +319,36 @@ class HighsBackend:
         self.h.changeColsBounds(len(cols), np.asarray(cols, dtype=np.int32),
                                 np.asarray(lower, float), np.asarray(upper, float))
 
+    def copy(self) -> HighsBackend:
+        """A new backend holding the same LP, its basis and options (its counters at 0)."""
+        twin = type(self)(self.options)
+        twin.h.passModel(self.h.getLp())
+        twin.h.setBasis(self.h.getBasis())
+        twin.use_threads(self.threads)
+        return twin
+
+    def absorb(self, other: HighsBackend) -> None:
+        """Add the counters of ``other`` (a copy that has done its work) to this one's."""
+        self.stalls += other.stalls
+        self.retries += other.retries
+        self.cold_starts += other.cold_starts
+        self.iterations += other.iterations
+
     def use_threads(self, threads: int) -> None:
         """From 2 threads, the LPs by HiGHS's parallel dual simplex (PAMI) on that many; on 1,
         its serial dual simplex."""
         self.threads = threads
         self.h.setOptionValue("threads", threads)
         self.h.setOptionValue("simplex_strategy", PAMI if threads > 1 else SERIAL_DUAL)
+        self._scheduler()
+
+    def _scheduler(self) -> None:
+        """Restart HiGHS's task scheduler (one per process) on this backend's threads if the last
+        run left it on others: a run on other threads than the scheduler's fails. Tree workers
+        change threads before they start, never while another backend runs."""
+        if _SCHEDULER["threads"] != self.threads:
+            self._hs.Highs.resetGlobalScheduler(True)
+            _SCHEDULER["threads"] = self.threads
 
     def basis(self) -> Any:
         """The current ``HighsBasis``."""
@@ -334,9 +370,7 @@ class HighsBackend:
         self.h.setOptionValue("time_limit", self.h.getRunTime() + float(seconds))
 
     def _run(self, iteration_limit: int) -> Any:
-        if _SCHEDULER["threads"] != self.threads:  # HiGHS's threads are one pool per process
-            self._hs.Highs.resetGlobalScheduler(True)
-            _SCHEDULER["threads"] = self.threads
+        self._scheduler()  # HiGHS's threads are one pool per process
         self.h.setOptionValue("simplex_iteration_limit", int(iteration_limit))
         self.h.run()
         self.iterations += self.h.getInfo().simplex_iteration_count

@@ -17,6 +17,7 @@ without LP cutoffs (a cut-off LP has no dual to prove its bound); :func:`solve_e
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -83,24 +84,26 @@ class ProofLog:
         self.nodes: list[_Node] = [_Node(None, None)]
         self.best_root: tuple[float, int] | None = None
         self.root_fixed: list[np.ndarray] = []  # the columns each root fixing fixed
+        self.lock = threading.RLock()  # the branch and cut's workers record at once
 
     # -------------------------------------------------------------- recording
     def proof(self, kind: str, duals: np.ndarray, cuts: Cuts, ids: np.ndarray) -> int:
         """Record one LP's duals (or Farkas ray) over its base rows and ``cuts`` (ids ``ids``);
         its index. A cut of zero dual adds nothing to the proof and is not kept."""
-        base = self.model.n_clusters + self.model.n_nodes
-        duals = np.asarray(duals, dtype=float)
-        used = np.flatnonzero(duals[base:] != 0)
-        new = [r for r in used if int(ids[r]) not in self.cut_rows]
-        if new:
-            mask = np.zeros(len(cuts), dtype=bool)
-            mask[new] = True
-            block = cuts.select(mask)
-            for j, r in enumerate(new):
-                self.cut_rows[int(ids[r])] = block.select(np.arange(len(block)) == j)
-        self.proofs.append(RawProof(kind, np.concatenate([duals[:base], duals[base:][used]]),
-                                    np.asarray(ids)[used].copy()))
-        return len(self.proofs) - 1
+        with self.lock:
+            base = self.model.n_clusters + self.model.n_nodes
+            duals = np.asarray(duals, dtype=float)
+            used = np.flatnonzero(duals[base:] != 0)
+            new = [r for r in used if int(ids[r]) not in self.cut_rows]
+            if new:
+                mask = np.zeros(len(cuts), dtype=bool)
+                mask[new] = True
+                block = cuts.select(mask)
+                for j, r in enumerate(new):
+                    self.cut_rows[int(ids[r])] = block.select(np.arange(len(block)) == j)
+            self.proofs.append(RawProof(kind, np.concatenate([duals[:base], duals[base:][used]]),
+                                        np.asarray(ids)[used].copy()))
+            return len(self.proofs) - 1
 
     def _cuts(self, proof: RawProof) -> Cuts:
         """The cuts of ``proof``'s duals, in their order."""
@@ -110,37 +113,43 @@ class ProofLog:
 
     def root_round(self, bound: float, proof: int, fixed: np.ndarray | None = None) -> None:
         """A root LP round: its bound (kept if the best) and the model columns it fixed, if any."""
-        if self.best_root is None or bound > self.best_root[0]:
-            self.best_root = (bound, proof)
-        if fixed is not None:
-            self.nodes[0].fix.append({"proof": proof, "rule": "reduced_cost"})
-            self.root_fixed.append(fixed)
+        with self.lock:
+            if self.best_root is None or bound > self.best_root[0]:
+                self.best_root = (bound, proof)
+            if fixed is not None:
+                self.nodes[0].fix.append({"proof": proof, "rule": "reduced_cost"})
+                self.root_fixed.append(fixed)
 
     def fix_rule(self, node: int, proof: int) -> None:
         """Reduced-cost fixing at ``node`` with ``proof``."""
-        self.nodes[node].fix.append({"proof": proof, "rule": "reduced_cost"})
-        self.nodes[node].lp = proof
+        with self.lock:
+            self.nodes[node].fix.append({"proof": proof, "rule": "reduced_cost"})
+            self.nodes[node].lp = proof
 
     def fix_var(self, node: int, proof: int, col: int, value: int) -> None:
         """Model column ``col`` fixed to ``value`` at ``node``, ``proof`` closing the other side."""
-        self.nodes[node].fix.append({"proof": proof, "vars": [(col, value)]})
+        with self.lock:
+            self.nodes[node].fix.append({"proof": proof, "vars": [(col, value)]})
 
     def leaf(self, node: int, proof: int) -> None:
         """``node`` closed by ``proof``."""
-        self.nodes[node].proof = proof
+        with self.lock:
+            self.nodes[node].proof = proof
 
     def child(self, parent: int, col: int, value: int) -> int:
         """A new child of ``parent`` with model column ``col`` at ``value``; its id."""
-        self.nodes.append(_Node(parent, (col, value)))
-        return len(self.nodes) - 1
+        with self.lock:
+            self.nodes.append(_Node(parent, (col, value)))
+            return len(self.nodes) - 1
 
     def close_unsolved(self, node: int) -> None:
         """``node`` was never solved (its parent's bound already closes it)."""
-        parent = self.nodes[node].parent
-        lp = None if parent is None else self.nodes[parent].lp
-        if lp is None:
-            raise CertificateError(f"node {node}: closed by its parent's bound, which has no proof")
-        self.nodes[node].proof = lp
+        with self.lock:
+            parent = self.nodes[node].parent
+            lp = None if parent is None else self.nodes[parent].lp
+            if lp is None:
+                raise CertificateError(f"node {node}: closed by its parent's bound, which has no proof")
+            self.nodes[node].proof = lp
 
     # -------------------------------------------------------------- writing
     def _var(self, col: int) -> list[Any]:

@@ -20,6 +20,8 @@ from gtsp_bench.solver import Progress, allowed_threads, no_progress
 #: ran 11-20 % more root rounds in the same time at UAV K = 100 and 200, its certified gap lower at
 #: every point measured; more threads were not measured).
 LP_THREADS = 2
+#: Workers of the branch and cut by default, where the cores allow (two cores: one LP each).
+TREE_WORKERS = 2
 #: Values of :attr:`MipOptions.branching`.
 BRANCHINGS = ("auto", "strong", "reliability")
 
@@ -58,6 +60,10 @@ class MipOptions:
         ``"reliability"`` strong-branches only columns whose pseudo-costs are not yet trusted,
         ``"auto"`` (default) the first until half of the strong LPs stop at their iteration
         limit, then the second.
+    workers
+        Threads of the branch and cut after the root, each with its own copy of the LP on one
+        core (:mod:`~gtsp_bench.solvers.exact.mip.workers`). ``None``: :data:`TREE_WORKERS`
+        where the cores allow (:func:`gtsp_bench.solver.allowed_threads`).
     """
 
     prune: bool = True
@@ -69,6 +75,7 @@ class MipOptions:
     certificate: str | None = None
     threads: int | None = None
     branching: str = "auto"
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("prune", "verbose"):
@@ -78,13 +85,18 @@ class MipOptions:
         check_float("abs_gap", self.abs_gap, 0.0, math.inf, open_low=False)
         if self.certificate is not None and not str(self.certificate):
             raise InputError("certificate must be a file path")
-        if self.threads is not None:
-            check_int("threads", self.threads, 1)
+        for name in ("threads", "workers"):
+            if getattr(self, name) is not None:
+                check_int(name, getattr(self, name), 1)
         check_choice("branching", self.branching, BRANCHINGS)
 
     def lp_threads(self) -> int:
         """Threads of a big model's LPs: ``threads``, else :data:`LP_THREADS` where allowed."""
         return self.threads if self.threads is not None else allowed_threads(LP_THREADS)
+
+    def tree_workers(self) -> int:
+        """Workers of the branch and cut: ``workers``, else :data:`TREE_WORKERS` where allowed."""
+        return self.workers if self.workers is not None else allowed_threads(TREE_WORKERS)
 
 
 def upper_bound_tour(problem: Problem, trials: int, seed: int, time_limit: float | None,

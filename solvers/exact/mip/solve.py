@@ -18,7 +18,8 @@ from typing import Any
 import numpy as np
 from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend
-from gtsp_bench.solvers.exact.mip.branch_cut import _Search, _Timer, check_symmetric
+from gtsp_bench.solvers.exact.mip.branch_cut import _Search, check_symmetric
+from gtsp_bench.solvers.exact.mip.tree_search import _Timer
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
@@ -211,16 +212,19 @@ class MipSolver:
     branching
         ``"auto"``, ``"strong"`` or ``"reliability"``: how the branch and cut picks its column
         (see :class:`~gtsp_bench.solvers.exact.mip.options.MipOptions`).
+    workers
+        Threads of the branch and cut, each with its own LP on one core (``None``: 2 where the
+        cores allow, see :class:`~gtsp_bench.solvers.exact.mip.options.MipOptions`).
     """
 
     def __init__(self, prune: bool = True, lns_trials: int = 1, root_rounds: int = 200,
                  core_edges: int = 10, abs_gap: float = 1e-6, verbose: bool = False,
                  certificate: str | None = None, threads: int | None = None,
-                 branching: str = "auto") -> None:
+                 branching: str = "auto", workers: int | None = None) -> None:
         self.options = MipOptions(prune=prune, lns_trials=lns_trials, root_rounds=root_rounds,
                                   core_edges=core_edges, abs_gap=abs_gap, verbose=verbose,
                                   certificate=None if certificate is None else str(certificate),
-                                  threads=threads, branching=branching)
+                                  threads=threads, branching=branching, workers=workers)
         # compiled or loaded here (a worker's start-up), not in a solve's clock
         flow.warm_up()
         prune_warm_up()

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 from gtsp_bench.solvers.exact.milp import Milp
-from gtsp_bench.solvers.exact.mip import backends, branch_cut, columns
+from gtsp_bench.solvers.exact.mip import backends, branch_cut, columns, tree_search
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -97,7 +97,7 @@ def test_root_purge_age_by_model_size(monkeypatch, big_from, root_age, seed):
     assert r.status == "optimal"
     assert r.objective == pytest.approx(run_solver("dp", inst, 0.5).objective, rel=1e-9)
     assert ages and ages[0] == root_age
-    assert set(ages) <= {root_age, branch_cut.NODE_PURGE_AGE}
+    assert set(ages) <= {root_age, tree_search.NODE_PURGE_AGE}
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -226,10 +226,12 @@ def test_bad_options_and_input_are_refused():
     """Options are checked when the solver is built; an asymmetric matrix is refused."""
     with pytest.raises(InputError, match="lns_trials must be an integer >= 0"):
         get_solver("milp", lns_trials=-2)
-    with pytest.raises(InputError, match="no option 'workers'"):
-        get_solver("milp", workers=2)
+    with pytest.raises(InputError, match="no option 'ants'"):
+        get_solver("milp", ants=2)
     with pytest.raises(InputError, match="threads must be an integer >= 1"):
         get_solver("milp", threads=0)
+    with pytest.raises(InputError, match="workers must be an integer >= 1"):
+        get_solver("milp", workers=0)
     w = np.array([[0, 1, 2, 3], [5, 0, 1, 2], [2, 1, 0, 1], [3, 2, 1, 0]], dtype=float)
     inst = Instance(name="asym", clusters=tuple(np.zeros((1, 2)) for _ in range(4)), params=None,
                     edge_weight_type="EXPLICIT", weights=w, symmetric=False)

@@ -59,6 +59,40 @@ def test_purge_keeps_the_backend_rows_in_step_with_the_cuts():
                                rtol=1e-9)
 
 
+def test_a_copy_holds_the_same_lp_and_goes_its_own_way():
+    """A tree worker's copy of the LP solves to the same optimum from the copied basis; cuts added
+    to it take ids from its own range and leave the original's rows and ids as they were; copies
+    solve at once on two threads to the optimum each has alone."""
+    import threading
+
+    lp, _ = _lp(HighsBackend, seed=3)
+    model = lp.model
+    res = lp.backend.solve_lp(60.0)
+    lp.add_cuts(separate(model, lp.full(res.values)))
+    first = lp.backend.solve_lp(60.0)
+    twin = lp.copy(1000)
+    again = twin.backend.solve_lp(60.0)
+    assert again.objective == pytest.approx(first.objective, rel=1e-9)
+    assert again.status == "optimal" and twin.backend.iterations == 0  # the basis was optimal
+    rows, ids = lp.backend.h.getNumRow(), lp.cut_ids.copy()
+    twin.add_cuts(separate(model, twin.full(again.values)))
+    assert twin.cut_ids[len(ids):].tolist() == list(range(1000, 1000 + len(twin.cuts) - len(ids)))
+    assert lp.backend.h.getNumRow() == rows and lp.cut_ids.tolist() == ids.tolist()
+    alone = [lp.backend.solve_lp(60.0).objective, twin.backend.solve_lp(60.0).objective]
+    both = [0.0, 0.0]
+    for x in (lp, twin):  # both from no basis
+        x.backend.h.clearSolver()
+    runs = [threading.Thread(target=lambda j, x: both.__setitem__(j, x.backend.solve_lp(60.0).objective),
+                             args=(j, x)) for j, x in enumerate((lp, twin))]
+    for t in runs:
+        t.start()
+    for t in runs:
+        t.join()
+    assert both == pytest.approx(alone, rel=1e-9)
+    lp.backend.absorb(twin.backend)
+    assert lp.backend.iterations >= twin.backend.iterations > 0
+
+
 def test_highs_backends_on_other_threads_share_a_process():
     """HiGHS keeps one task scheduler per process and fails a run whose thread count differs from
     it: backends on 2 threads (parallel dual simplex), then 1, then 2 again, each solve the same

@@ -112,63 +112,6 @@ def test_the_root_trace_has_a_record_per_root_round():
     assert all(t["bound"] <= t["lp"] + 1e-9 for t in trace) and last["cuts"] > 0
 
 
-@pytest.mark.parametrize("dive", [True, False])
-def test_a_node_after_a_jump_starts_cold(dive, monkeypatch):
-    """A K = 16 instance left to the branch and cut (two root rounds, greedy tour), every jump
-    counted as one, HiGHS told that a run stalled: each node taken from the open ones (every node
-    but the first when nothing dives) has its first LP solved from no basis, a dived-into child
-    not; with no jump large enough, none is; the proof is the same."""
-    from gtsp_bench.solvers.exact.mip import branch_cut
-    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
-
-    from gtsp_bench.generator import generate_instance
-
-    class Stalled(HighsBackend):
-        def __init__(self, options: MipOptions) -> None:
-            super().__init__(options)
-            self.stalls = 1
-
-    if not dive:
-        monkeypatch.setattr(branch_cut, "DIVE_SHARE", -1.0)
-    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 0)
-    problem = price(generate_instance(16, 6, seed=8), 0.5)
-    options = MipOptions(root_rounds=2, lns_trials=0)
-    r = solve_exact(problem, Stalled, options)
-    assert r.status == "optimal" and r.stats["bc_nodes"] >= 3
-    cold = r.stats["lp_cold_starts"]
-    assert cold == r.stats["jumps"]
-    assert cold == r.stats["bc_nodes"] - 1 if not dive else 1 <= cold < r.stats["bc_nodes"] - 1
-    if dive:
-        return
-    monkeypatch.setattr(branch_cut, "JUMP_BOUNDS", 10**9)
-    warm = solve_exact(problem, Stalled, options)
-    assert warm.stats["lp_cold_starts"] == 0 and "jumps" not in warm.stats
-    assert warm.status == "optimal"
-    assert r.objective == pytest.approx(warm.objective, rel=1e-12)
-
-
-def test_full_strong_branching_takes_every_candidate(monkeypatch):
-    """While strong-branching LPs finish (a small instance), every one of the closest candidates
-    is strong-branched: the reliability-branching budget (:data:`branching.MAX_STRONG`,
-    :data:`branching.LOOKAHEAD`) leaves the search unchanged."""
-    from gtsp_bench.solvers.exact.mip import branching
-    from gtsp_bench.solvers.exact.mip.backends import HighsBackend
-
-    from gtsp_bench.generator import generate_instance
-
-    problem = price(generate_instance(16, 6, seed=8), 0.5)
-    options = MipOptions(root_rounds=2, lns_trials=0)
-    full = solve_exact(problem, HighsBackend, options)
-    assert full.status == "optimal" and "strong_partial" not in full.stats
-    assert full.stats["strong_lps"] > 2 * 2  # some node strong-branched more than 2 candidates
-    monkeypatch.setattr(branching, "MAX_STRONG", 1)
-    monkeypatch.setattr(branching, "LOOKAHEAD", 1)
-    capped = solve_exact(problem, HighsBackend, options)
-    for key in ("strong_lps", "bc_nodes", "node_lps"):
-        assert capped.stats[key] == full.stats[key]
-    assert capped.objective == pytest.approx(full.objective, rel=1e-12)
-
-
 @pytest.mark.parametrize("rule", ["ROOT_TAIL", "ROOT_FLAT_SHARE"])
 @pytest.mark.parametrize("seed", range(4))
 def test_a_root_that_tails_off_at_once_leaves_the_search_exact(seed, rule, monkeypatch):

@@ -1,0 +1,75 @@
+"""The state the branch and cut's workers share: the incumbent and the open nodes."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+from gtsp_bench.solvers.exact.mip.tree import Node
+from gtsp_bench.solvers.exact.mip.workers import Incumbent, OpenNodes
+
+
+def _node(bound: float, seq: int) -> Node:
+    return Node(bound, seq, np.full(3, -1, dtype=np.int8))
+
+
+def test_the_incumbent_takes_cheaper_tours_only_and_its_bound_only_rises():
+    """A dearer or equal tour is refused; the bound never falls; ``progress`` hears the cost and
+    the bound capped at the cost."""
+    heard: list[tuple[float, float]] = []
+    inc = Incumbent(np.array([0, 1]), 10.0, 3.0, lambda cost, bound=None: heard.append((cost, bound)))
+    assert not inc.offer(np.array([1, 0]), 10.0) and inc.tour.tolist() == [0, 1]
+    assert inc.offer(np.array([1, 0]), 8.0) and inc.cost == 8.0 and inc.tour.tolist() == [1, 0]
+    inc.raise_bound(5.0)
+    inc.raise_bound(4.0)
+    assert inc.bound == 5.0
+    inc.raise_bound(9.0)
+    inc.report()
+    assert heard == [(8.0, 3.0), (8.0, 8.0)]
+
+
+def test_open_nodes_give_the_best_first_and_count_held_ones_in_the_bound():
+    """Nodes come out by bound, then age; a held node's bound counts in the least bound until its
+    worker takes another or ends; ``top`` sees the open ones only."""
+    tree = OpenNodes(_node(1.0, 0))
+    tree.put(_node(0.5, 2))
+    tree.put(_node(0.5, 1))
+    first = tree.take(0, lambda: False)
+    assert (first.bound, first.seq) == (0.5, 1)
+    assert tree.bound() == 0.5 and tree.top(99.0) == 0.5
+    tree.hold(0, _node(0.7, 3))  # worker 0 dives into a child
+    second = tree.take(1, lambda: False)
+    assert (second.bound, second.seq) == (0.5, 2)
+    assert tree.bound() == 0.5  # worker 1 holds it
+    assert tree.take(1, lambda: False).bound == 1.0
+    assert tree.bound() == 0.7 and tree.top(99.0) == 99.0
+    tree.drop(0)
+    assert tree.bound() == 1.0
+    tree.drop(1)
+    assert tree.bound() == float("inf")
+
+
+def test_a_worker_without_a_node_waits_for_the_children_of_another():
+    """With nothing open while another worker holds a node, ``take`` waits: it gets the child that
+    worker puts back; once nothing is open or held it returns ``None``, as after ``stop()``."""
+    tree = OpenNodes(_node(0.0, 0))
+    assert tree.take(0, lambda: False).seq == 0
+    got: list[Node | None] = []
+    waiter = threading.Thread(target=lambda: got.append(tree.take(1, lambda: False)))
+    waiter.start()
+    time.sleep(0.2)
+    assert not got  # still waiting: worker 0 may branch
+    tree.put(_node(0.3, 1))
+    waiter.join(5)
+    assert got and got[0].seq == 1
+    done: list[Node | None] = []  # worker 0 finds nothing open and waits ...
+    waiter = threading.Thread(target=lambda: done.append(tree.take(0, lambda: False)))
+    waiter.start()
+    time.sleep(0.1)
+    assert not done
+    tree.drop(1)  # ... and ends once worker 1 ends too
+    waiter.join(5)
+    assert done == [None]
+    tree.put(_node(0.9, 2))
+    assert tree.take(0, lambda: True) is None  # stopped: no node, even with one open
