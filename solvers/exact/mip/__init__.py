@@ -39,8 +39,8 @@ of the GTSP):
    reduced-cost fixing at every node, strong branching on ``y`` first (reliability branching
    once the strong-branching LPs mostly stop at their cap; a child shown empty fixes the column
    at the node instead), by two workers where two cores are free (``workers``: threads taking
-   the best open nodes, each with its own LP). A backend with lazy constraints (Gurobi) solves the MILP itself instead, over
-   every column not fixed, adding subtour rows from a callback.
+   the best open nodes, each with its own LP). A backend with lazy constraints (Gurobi) solves
+   the MILP itself instead, over every column not fixed, adding subtour rows from a callback.
 
 Branching ourselves replaced re-solving HiGHS's MILP after each subtour solution: on a K = 20
 instance whose root gap stayed open, HiGHS spent 110 s on 3 nodes without finishing (it can

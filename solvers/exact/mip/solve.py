@@ -19,8 +19,8 @@ import numpy as np
 from gtsp_bench.solvers.exact.mip import flow
 from gtsp_bench.solvers.exact.mip.backends import Backend, LazyMipBackend
 from gtsp_bench.solvers.exact.mip.branch_cut import _Search, check_symmetric
-from gtsp_bench.solvers.exact.mip.tree_search import _Timer
 from gtsp_bench.solvers.exact.mip.options import MipOptions, restart_tours, upper_bound_tour
+from gtsp_bench.solvers.exact.mip.tree_search import _Timer
 from gtsp_bench.solvers.exact.prune import prune_heads
 from gtsp_bench.solvers.exact.prune import warm_up as prune_warm_up
 from gtsp_bench.solvers.heads import optimal_heads
