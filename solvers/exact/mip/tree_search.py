@@ -103,7 +103,11 @@ class TreeSearch:
             # queue behind each other (45ts225: no faster than one worker without this cap)
             with threadpool_limits(limits=1, user_api="blas"), \
                     ThreadPoolExecutor(workers, thread_name_prefix="milp-tree") as pool:
-                done = list(pool.map(lambda j: searches[j].work(tree, j), range(workers)))
+                try:
+                    done = list(pool.map(lambda j: searches[j].work(tree, j), range(workers)))
+                except BaseException:  # (an interrupt, or a worker's error): the others end too
+                    tree.close()
+                    raise
             for twin in searches[1:]:
                 self.open_cids += twin.open_cids
                 self.lp.backend.absorb(twin.lp.backend)
@@ -121,7 +125,7 @@ class TreeSearch:
         lp = self.lp
 
         def stop() -> bool:
-            return self.proven or self.left() <= 0
+            return tree.closed or self.proven or self.left() <= 0
 
         explored = 0
         popped = True  # whether ``node`` came from the open ones (a jump), not a dive
@@ -170,6 +174,9 @@ class TreeSearch:
                 # the global bound: the best open or held node (the incumbent's when none is)
                 self.state.raise_bound(min(tree.bound(), self.ub - self.gap))
                 self.report()
+        except BaseException:
+            tree.close()  # the other workers end at their next node
+            raise
         finally:
             tree.drop(worker)
         return explored

@@ -91,6 +91,7 @@ class OpenNodes:
         self.heap: list[Node] = [first]
         self.held: dict[int, float] = {}  # worker -> the bound of the node it holds
         self.seq = 0
+        self.closed = False  # a worker failed or the caller was interrupted: every worker ends
 
     def next_seq(self) -> int:
         """A new creation number (ties of equal bounds go to the older node)."""
@@ -111,10 +112,11 @@ class OpenNodes:
 
     def take(self, worker: int, stop: Callable[[], bool]) -> Node | None:
         """The best open node for ``worker`` (which holds none after this call until it gets one);
-        ``None`` when none is left and no other worker holds one, or once ``stop()``."""
+        ``None`` when none is left and no other worker holds one, or once ``stop()`` or
+        :meth:`close`."""
         with self.cond:
             self.held.pop(worker, None)
-            while not stop():
+            while not (self.closed or stop()):
                 if self.heap:
                     node = heapq.heappop(self.heap)
                     self.held[worker] = node.bound
@@ -135,6 +137,12 @@ class OpenNodes:
         with self.cond:
             return min(([self.heap[0].bound] if self.heap else []) + list(self.held.values()),
                        default=math.inf)
+
+    def close(self) -> None:
+        """End the search: ``take`` gives no more nodes, and workers stop at their next node."""
+        with self.cond:
+            self.closed = True
+            self.cond.notify_all()
 
     def drop(self, worker: int) -> None:
         """``worker`` ends (the node it held, if any, was put back)."""

@@ -97,3 +97,33 @@ def test_a_proof_by_two_workers_is_certified(tmp_path: Path):
     assert sol.stats["tree_workers"] == 2
     result = check_certificate(inst, read_certificate(path))
     assert result.proven and result.value == pytest.approx(sol.objective, rel=1e-9)
+
+
+def test_a_failing_worker_ends_the_search_at_once(monkeypatch):
+    """An error in one worker's node ends the other worker at its next node (at most one more
+    node begins; the tree has about 90), and the solve raises the error."""
+    import threading
+    import time
+
+    from gtsp_bench.solvers.exact.mip import tree_search
+
+    node_loop = tree_search.TreeSearch._node_loop
+    calls = {"n": 0}
+    lock = threading.Lock()
+
+    def failing(self, branched=None):
+        with lock:
+            calls["n"] += 1
+            fail = calls["n"] == 6
+        if fail:
+            raise RuntimeError("a worker broke")
+        return node_loop(self, branched)
+
+    monkeypatch.setattr(tree_search.TreeSearch, "_node_loop", failing)
+    problem = price(generate_instance(20, 5, seed=0), 0.5)
+    start = time.perf_counter()
+    with pytest.raises(RuntimeError, match="a worker broke"):
+        solve_exact(problem, HighsBackend, MipOptions(root_rounds=2, lns_trials=0, workers=2),
+                    time_limit=300.0)
+    assert time.perf_counter() - start < 60.0
+    assert calls["n"] <= 6 + 1

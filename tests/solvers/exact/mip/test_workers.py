@@ -73,3 +73,19 @@ def test_a_worker_without_a_node_waits_for_the_children_of_another():
     assert done == [None]
     tree.put(_node(0.9, 2))
     assert tree.take(0, lambda: True) is None  # stopped: no node, even with one open
+
+
+def test_a_closed_tree_gives_no_more_nodes_and_wakes_its_waiters():
+    """After ``close`` a waiting worker gets ``None`` at once, and so does any later ``take``,
+    even with nodes open."""
+    tree = OpenNodes(_node(0.0, 0))
+    assert tree.take(0, lambda: False).seq == 0
+    got: list[Node | None] = []
+    waiter = threading.Thread(target=lambda: got.append(tree.take(1, lambda: False)))
+    waiter.start()
+    time.sleep(0.1)
+    tree.close()
+    waiter.join(5)
+    assert got == [None]
+    tree.put(_node(0.5, 1))
+    assert tree.take(0, lambda: False) is None
