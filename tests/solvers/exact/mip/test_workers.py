@@ -14,6 +14,15 @@ def _node(bound: float, seq: int) -> Node:
     return Node(bound, seq, np.full(3, -1, dtype=np.int8))
 
 
+def _waiting_take(tree: OpenNodes, worker: int) -> tuple[threading.Thread, list[Node | None]]:
+    """``worker``'s ``take`` on a thread of its own, started and given 0.1 s; what it got."""
+    got: list[Node | None] = []
+    waiter = threading.Thread(target=lambda: got.append(tree.take(worker, lambda: False)))
+    waiter.start()
+    time.sleep(0.1)
+    return waiter, got
+
+
 def test_the_incumbent_takes_cheaper_tours_only_and_its_bound_only_rises():
     """A dearer or equal tour is refused; the bound never falls; ``progress`` hears the cost and
     the bound capped at the cost."""
@@ -55,18 +64,12 @@ def test_a_worker_without_a_node_waits_for_the_children_of_another():
     worker puts back; once nothing is open or held it returns ``None``, as after ``stop()``."""
     tree = OpenNodes(_node(0.0, 0))
     assert tree.take(0, lambda: False).seq == 0
-    got: list[Node | None] = []
-    waiter = threading.Thread(target=lambda: got.append(tree.take(1, lambda: False)))
-    waiter.start()
-    time.sleep(0.2)
+    waiter, got = _waiting_take(tree, 1)
     assert not got  # still waiting: worker 0 may branch
     tree.put(_node(0.3, 1))
     waiter.join(5)
     assert got and got[0].seq == 1
-    done: list[Node | None] = []  # worker 0 finds nothing open and waits ...
-    waiter = threading.Thread(target=lambda: done.append(tree.take(0, lambda: False)))
-    waiter.start()
-    time.sleep(0.1)
+    waiter, done = _waiting_take(tree, 0)  # worker 0 finds nothing open and waits ...
     assert not done
     tree.drop(1)  # ... and ends once worker 1 ends too
     waiter.join(5)
@@ -80,10 +83,7 @@ def test_a_closed_tree_gives_no_more_nodes_and_wakes_its_waiters():
     even with nodes open."""
     tree = OpenNodes(_node(0.0, 0))
     assert tree.take(0, lambda: False).seq == 0
-    got: list[Node | None] = []
-    waiter = threading.Thread(target=lambda: got.append(tree.take(1, lambda: False)))
-    waiter.start()
-    time.sleep(0.1)
+    waiter, got = _waiting_take(tree, 1)
     tree.close()
     waiter.join(5)
     assert got == [None]
