@@ -28,6 +28,9 @@ class Node:
         the parent), for the pseudo-costs.
     cid
         Its number in the search's proof log (0 without one).
+    worker
+        The tree worker that made it (:meth:`~gtsp_bench.solvers.exact.mip.workers.OpenNodes.take`
+        gives a worker its own nodes first while their bounds are near the best).
     """
 
     bound: float
@@ -35,3 +38,4 @@ class Node:
     fixes: np.ndarray = field(compare=False)
     branched: tuple[int, bool, float, float] | None = field(default=None, compare=False)
     cid: int = field(default=0, compare=False)
+    worker: int = field(default=0, compare=False)

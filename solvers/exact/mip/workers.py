@@ -110,15 +110,21 @@ class OpenNodes:
         with self.cond:
             self.held[worker] = node.bound
 
-    def take(self, worker: int, stop: Callable[[], bool]) -> Node | None:
+    def take(self, worker: int, stop: Callable[[], bool],
+             near: Callable[[float], float] | None = None) -> Node | None:
         """The best open node for ``worker`` (which holds none after this call until it gets one);
         ``None`` when none is left and no other worker holds one, or once ``stop()`` or
-        :meth:`close`."""
+        :meth:`close`.
+
+        With ``near``, a function of the best open bound: the newest of the nodes that ``worker``
+        made (:attr:`Node.worker`) whose bound is at most ``near(best bound)``, if there is one
+        (it is likely the sibling of the worker's last dive, a few column bounds from its LP),
+        else the best."""
         with self.cond:
             self.held.pop(worker, None)
             while not (self.closed or stop()):
                 if self.heap:
-                    node = heapq.heappop(self.heap)
+                    node = self._pop(worker, near)
                     self.held[worker] = node.bound
                     return node
                 if not self.held:  # nothing open and nobody working: the tree is done
@@ -126,6 +132,20 @@ class OpenNodes:
                     return None
                 self.cond.wait(WAIT_SECONDS)
             return None
+
+    def _pop(self, worker: int, near: Callable[[float], float] | None) -> Node:
+        """Remove and return the node :meth:`take` gives ``worker`` (the heap is not empty)."""
+        if near is not None:
+            limit = near(self.heap[0].bound)
+            own = [i for i, n in enumerate(self.heap) if n.worker == worker and n.bound <= limit]
+            if own:
+                i = max(own, key=lambda i: self.heap[i].seq)
+                node = self.heap[i]
+                self.heap[i] = self.heap[-1]
+                self.heap.pop()
+                heapq.heapify(self.heap)
+                return node
+        return heapq.heappop(self.heap)
 
     def top(self, default: float) -> float:
         """The best open node's bound (``default`` when none is open)."""

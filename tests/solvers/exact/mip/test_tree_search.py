@@ -127,3 +127,34 @@ def test_a_failing_worker_ends_the_search_at_once(monkeypatch):
                     time_limit=300.0)
     assert time.perf_counter() - start < 60.0
     assert calls["n"] <= 6 + 1
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_two_workers_take_their_own_nodes_first_and_one_takes_the_best(workers, monkeypatch):
+    """With two workers each open node is marked by the worker that made it, and each ``take``
+    asks for the worker's own nodes near the best (``near`` within the incumbent); one worker
+    always takes the best node (no ``near``), as before there were workers."""
+    from gtsp_bench.solvers.exact.mip.workers import OpenNodes
+
+    take, put = OpenNodes.take, OpenNodes.put
+    nears: list[object] = []
+    makers: set[int] = set()
+
+    def spy_take(self, worker, stop, near=None):
+        nears.append(near)
+        return take(self, worker, stop, near)
+
+    def spy_put(self, node):
+        makers.add(node.worker)
+        return put(self, node)
+
+    monkeypatch.setattr(OpenNodes, "take", spy_take)
+    monkeypatch.setattr(OpenNodes, "put", spy_put)
+    problem = price(generate_instance(20, 5, seed=0), 0.5)
+    r = solve_exact(problem, HighsBackend, MipOptions(root_rounds=2, lns_trials=0, workers=workers))
+    assert r.status == "optimal" and r.stats["bc_nodes"] >= 20
+    if workers == 1:
+        assert nears and all(near is None for near in nears) and makers == {0}
+        return
+    assert nears and all(callable(near) for near in nears) and makers == {0, 1}
+    assert nears[0](10.0) >= 10.0  # the window starts at the best bound

@@ -10,8 +10,8 @@ from gtsp_bench.solvers.exact.mip.tree import Node
 from gtsp_bench.solvers.exact.mip.workers import Incumbent, OpenNodes
 
 
-def _node(bound: float, seq: int) -> Node:
-    return Node(bound, seq, np.full(3, -1, dtype=np.int8))
+def _node(bound: float, seq: int, worker: int = 0) -> Node:
+    return Node(bound, seq, np.full(3, -1, dtype=np.int8), worker=worker)
 
 
 def _waiting_take(tree: OpenNodes, worker: int) -> tuple[threading.Thread, list[Node | None]]:
@@ -57,6 +57,23 @@ def test_open_nodes_give_the_best_first_and_count_held_ones_in_the_bound():
     assert tree.bound() == 1.0
     tree.drop(1)
     assert tree.bound() == float("inf")
+
+
+def test_a_worker_takes_its_own_newest_node_while_near_the_best():
+    """With ``near``, a worker gets the newest node it made among those with bounds up to
+    ``near(best bound)``; the best one when it made none there; the heap stays in order."""
+    tree = OpenNodes(_node(1.0, 0))
+    for bound, seq, worker in [(1.2, 1, 1), (1.1, 2, 1), (1.3, 3, 0), (2.5, 4, 1), (1.05, 5, 0)]:
+        tree.put(_node(bound, seq, worker))
+
+    def near(best: float) -> float:
+        return best + 0.5
+
+    assert tree.take(1, lambda: False, near).seq == 2  # its newest within 1.5 (not seq 4 at 2.5)
+    assert tree.take(0, lambda: False, near).seq == 5
+    assert tree.take(0, lambda: False, near).seq == 3  # (the best, 1.0, is worker 0's too: older)
+    assert tree.take(1, lambda: False, lambda best: best).seq == 0  # none of its own that near
+    assert [tree.take(1, lambda: False).seq for _ in range(2)] == [1, 4]  # by bound without near
 
 
 def test_a_worker_without_a_node_waits_for_the_children_of_another():
