@@ -2,7 +2,8 @@
 
 With ``MipOptions.workers`` above 1 the search after the root runs on that many threads, each a
 worker with its own copy of the LP (:meth:`~gtsp_bench.solvers.exact.mip.backends.LpModel.copy`):
-each takes the best open node, solves it, dives into a child and puts the other back, as the
+each takes the best open node (or the newest it made itself, while that one's bound is near the
+best: :meth:`OpenNodes.take`), solves it, dives into a child and puts the other back, as the
 single search does. HiGHS solves an LP without Python's lock, so the workers' LPs run on separate
 cores; the separation and the bookkeeping between LPs hold it. They share:
 
