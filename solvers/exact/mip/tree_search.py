@@ -191,7 +191,7 @@ class TreeSearch:
             tree.drop(worker)
         return explored
 
-    def _children(self, tree: OpenNodes, cid: int, outcome: Any, worker: int = 0) -> Node | None:
+    def _children(self, tree: OpenNodes, cid: int, outcome: Any, worker: int) -> Node | None:
         """Branch as the node loop's ``outcome`` says (or close the node when it is ``None``): one
         child goes to the open nodes, the other is returned to dive into unless its bound is far
         above the best open one (then both go); both marked as made by ``worker``."""

@@ -140,10 +140,7 @@ class OpenNodes:
             limit = near(self.heap[0].bound)
             own = [i for i, n in enumerate(self.heap) if n.worker == worker and n.bound <= limit]
             if own:
-                i = max(own, key=lambda i: self.heap[i].seq)
-                node = self.heap[i]
-                self.heap[i] = self.heap[-1]
-                self.heap.pop()
+                node = self.heap.pop(max(own, key=lambda i: self.heap[i].seq))
                 heapq.heapify(self.heap)
                 return node
         return heapq.heappop(self.heap)
