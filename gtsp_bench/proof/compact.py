@@ -78,9 +78,10 @@ def _does_its_part(priced: Any, uses: list[tuple[Any, ...]], cutoff: Fraction) -
 
 
 def proof_scales(instance: Instance, cert: dict[str, Any]) -> list[int]:
-    """For each proof of a certificate (version 1's layout, accepted by the checker), the
-    coarsest scale of :data:`BITS` (up to its own) at which it does what the certificate uses it
-    for; each scale is found by bisection."""
+    """For each proof of a certificate (version 1's layout), the coarsest scale of :data:`BITS`
+    (up to its own) at which it does what the certificate uses it for; each scale is found by
+    bisection. Raises the checker's :class:`~gtsp_bench.proof.check.ProofError` if it refuses the
+    certificate."""
     uses: dict[int, list[tuple[Any, ...]]] = {}
     check_certificate(instance, cert, uses)
     problem = price(instance, cert["instance"].get("omega"))
@@ -116,8 +117,8 @@ def _accepted(instance: Instance, cert: dict[str, Any]) -> bool:
         return False
 
 
-def compact_certificate(instance: Instance, cert: dict[str, Any], trim: bool = True
-                        ) -> dict[str, Any]:
+def compact_certificate(instance: Instance, cert: dict[str, Any], trim: bool = True,
+                        strict: bool = False) -> dict[str, Any]:
     """The densest form of a certificate that still checks, in version 2's layout.
 
     Parameters
@@ -129,6 +130,10 @@ def compact_certificate(instance: Instance, cert: dict[str, Any], trim: bool = T
         2's layout, its duals unchanged.
     trim
         Whether to trim the root's fixings first.
+    strict
+        Raise the checker's :class:`~gtsp_bench.proof.check.ProofError` for a certificate it
+        refuses instead of writing it as it is (a writer that needs to know pays for no extra
+        check: finding the scales checks it anyway).
 
     Returns
     -------
@@ -138,11 +143,16 @@ def compact_certificate(instance: Instance, cert: dict[str, Any], trim: bool = T
         on the coarsest common scale that does (or the duals as they were).
     """
     base = to_version1(cert)
-    if not _accepted(instance, base):  # nothing to keep: only the layout changes
-        return to_version2(base)
-    if trim:
-        base = trim_certificate(instance, base)
-    candidate = rescale(base, proof_scales(instance, base))
+    try:  # finding the scales checks the certificate on the way
+        if trim:
+            check_certificate(instance, base)
+            base = trim_certificate(instance, base)
+        scales = proof_scales(instance, base)
+    except ProofError:
+        if strict:
+            raise
+        return to_version2(base)  # nothing to keep: only the layout changes
+    candidate = rescale(base, scales)
     if not _accepted(instance, candidate):
         top = min(int(p.get("bits", base["dual_bits"])) for p in base["proofs"])
         tries = [b for b in BITS if b < top]

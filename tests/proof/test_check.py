@@ -17,7 +17,7 @@ from gtsp_bench.proof import ProofError, check_certificate
 from gtsp_bench.proof.encode import encode_proofs, to_version1, to_version2
 from gtsp_bench.proof.format import read_certificate
 from gtsp_bench.registry import run_solver
-from tests.conftest import GTSPLIB
+from tests.conftest import GTSPLIB, uncompacted
 
 
 def _certify(instance: Instance, omega: float | None, path: Any, version: int = 2,
@@ -26,7 +26,7 @@ def _certify(instance: Instance, omega: float | None, path: Any, version: int = 
     before version 2, every dual on the scale 2**-32)."""
     with pytest.MonkeyPatch.context() as mp:
         if version == 1:
-            mp.setattr(certify, "compact_certificate", lambda instance, cert, trim: cert)
+            mp.setattr(certify, "compact_certificate", uncompacted)
         sol = Milp(certificate=str(path), **options).solve(instance, omega, time_limit=120)
     assert sol.status == "optimal" and sol.stats["certificate_bytes"] > 0
     cert = read_certificate(path)

@@ -22,7 +22,7 @@ from gtsp_bench.proof.compact import (
 )
 from gtsp_bench.proof.encode import to_version1
 from gtsp_bench.proof.format import read_certificate
-from tests.conftest import GTSPLIB
+from tests.conftest import GTSPLIB, uncompacted
 
 NAME = "20kroA100"
 
@@ -34,7 +34,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[Instance, Path]:
     inst = read_instance(GTSPLIB / f"{NAME}.gtsp.gz")
     path = tmp_path_factory.mktemp("c") / "k.cert.json.gz"
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(certify, "compact_certificate", lambda instance, cert, trim: cert)
+        mp.setattr(certify, "compact_certificate", uncompacted)
         mp.setattr(certify.ProofLog, "_needed_fixings", lambda self, chained: self.nodes[0].fix)
         assert Milp(certificate=str(path)).solve(inst, None, time_limit=60).status == "optimal"
     cert = read_certificate(path)
@@ -94,3 +94,19 @@ def test_the_command_converts_a_file(written: tuple[Instance, Path], tmp_path: P
     assert out.stat().st_size < path.stat().st_size / 2
     assert check_certificate(inst, read_certificate(out)).proven
     assert main([]) == 2
+
+
+def test_a_refused_certificate_is_kept_or_raised(written: tuple[Instance, Path]) -> None:
+    """A certificate the checker refuses is only rewritten in version 2's layout (and still
+    refused); with ``strict`` the checker's error is raised instead."""
+    from gtsp_bench.proof import ProofError
+
+    inst, path = written
+    coarse = rescale(read_certificate(path), 0)
+    out = compact_certificate(inst, coarse, trim=False)
+    assert out["version"] == 2
+    with pytest.raises(ProofError, match="not above the cutoff"):
+        check_certificate(inst, out)
+    for trim in (False, True):
+        with pytest.raises(ProofError, match="not above the cutoff"):
+            compact_certificate(inst, coarse, trim=trim, strict=True)
