@@ -9,17 +9,20 @@ bound. A Farkas proof is the same with ``c = 0``: a positive value shows that no
 domain.
 
 Duals are integers scaled by ``2**bits``; the scaled ``A'w`` of every column is computed in int64
-(each subtour row's dual summed over its node pairs in 26-bit halves, exact in float64) and the costs are
-compared and summed exactly (scaled integers for integer costs, fractions otherwise).
+(the subtour rows' part as integer sparse products, ``M' diag(w) M`` over their member masks) and
+the costs are compared and summed exactly (scaled integers for integer costs, fractions
+otherwise).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from gtsp_bench.checks import is_int
 from gtsp_bench.problem import Problem
@@ -27,8 +30,6 @@ from gtsp_bench.proof.families import Blossom, Cut, Gsec
 
 #: Largest magnitude of any scaled sum (int64 with room).
 _LIMIT = 2**62
-#: Bits of the low half when duals are split for an exact float64 product.
-_SPLIT = 26
 
 
 @dataclass(frozen=True)
@@ -115,36 +116,45 @@ def _sparse(entries: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]
     """Indices and integer values of ``[[index, value], ...]``."""
     if not isinstance(entries, list):
         raise ValueError(f"{what} must be a list of [index, value] pairs")
-    idx, val = [], []
-    for e in entries:
-        if (not isinstance(e, list) or len(e) != 2
-                or not all(is_int(v) for v in e)
-                or not 0 <= e[0] < size):
+    for e in entries:  # plain ints pass the first test of each: is_int only for the rest
+        if not (isinstance(e, list) and len(e) == 2
+                and (type(e[0]) is int or is_int(e[0])) and (type(e[1]) is int or is_int(e[1]))
+                and 0 <= e[0] < size):
             raise ValueError(f"{what}: {e!r} is not [index in [0, {size}), integer]")
-        idx.append(e[0])
-        val.append(e[1])
-    if len(set(idx)) != len(idx):
+    try:
+        pairs = np.array(entries, dtype=np.int64).reshape(-1, 2)
+    except OverflowError:
+        raise ValueError(f"{what}: a dual value is too large") from None
+    idx, val = pairs[:, 0], pairs[:, 1]
+    if len(np.unique(idx)) != len(idx):
         raise ValueError(f"{what}: an index is repeated")
-    if val and max(abs(v) for v in val) >= _LIMIT // 8:
+    if ((val >= _LIMIT // 8) | (val <= -(_LIMIT // 8))).any():
         raise ValueError(f"{what}: a dual value is too large")
-    return np.array(idx, dtype=np.int64), np.array(val, dtype=np.int64)
+    return idx, val
 
 
-def _split_product(rows: list[Gsec], weights: np.ndarray) -> np.ndarray:
-    """``M.T @ diag(weights) @ M`` exactly, ``M`` the 0/1 member masks of ``rows`` (int64
-    ``weights``): each row's weight summed over its node pairs (no matrix product, whose threads
-    contend on a busy machine), in float64 halves of 26 bits that sum exactly."""
-    n = len(rows[0].members)
-    pairs = [r.pairs for r in rows]
-    flat = np.concatenate(pairs)
-    reps = np.array([len(p) for p in pairs])
-    hi = weights >> _SPLIT
-    lo = weights - (hi << _SPLIT)
-    out = np.zeros(n * n, np.int64)
-    for part, shift in ((hi, _SPLIT), (lo, 0)):
-        sums = np.bincount(flat, np.repeat(part.astype(np.float64), reps), minlength=n * n)
-        out += np.rint(sums).astype(np.int64) << shift
-    return out.reshape(n, n)
+def _gsec_sums(rows: list[Gsec], weights: np.ndarray, cluster_of: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``A'w`` of subtour rows with int64 ``weights``, exactly: ``(n,)`` over the y columns and
+    ``(n, n)`` over the node pairs, ``M' diag(w) M`` for ``M`` the rows' 0/1 member masks (each
+    row's weight summed over its ordered member pairs, ``i == j`` too). Integer sparse products:
+    as many operations as member pairs, no float rounding, no threads."""
+    n = len(cluster_of)
+    nodes = [r.nodes for r in rows]
+    counts = np.array([len(q) for q in nodes], dtype=np.int64)
+    indices = np.concatenate(nodes)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    row_of = np.repeat(np.arange(len(rows)), counts)
+    cl = cluster_of[indices]
+    c1 = np.array([r.c1 for r in rows])[row_of]
+    c2 = np.array([r.c2 for r in rows])[row_of]
+    y_coef = -((cl != c1).astype(np.int64) + (cl == c2))  # Gsec.y_coef, entry by entry
+    shape = (len(rows), n)
+    aw_y = sp.csr_array((y_coef, indices, indptr), shape=shape).T @ weights
+    members = sp.csr_array((np.ones(len(indices), np.int64), indices, indptr), shape=shape)
+    weighted = sp.csr_array((weights[row_of], indices, indptr), shape=shape)
+    aw_x = (members.T @ weighted).toarray()
+    return np.asarray(aw_y, dtype=np.int64), aw_x.astype(np.int64, copy=False)
 
 
 @dataclass(frozen=True)
@@ -162,7 +172,19 @@ class Priced:
     aw_x: np.ndarray  # (n, n) int64: A'w of the edge columns, scaled
 
     def approx(self, x: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Float reduced costs of the y (``x`` false) or edge columns and a bound on their error."""
+        """Float reduced costs of the y (``x`` false) or edge columns and a bound on their error
+        (computed once: do not change them)."""
+        return self._approx_x if x else self._approx_y
+
+    @functools.cached_property
+    def _approx_x(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._approx(True)
+
+    @functools.cached_property
+    def _approx_y(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._approx(False)
+
+    def _approx(self, x: bool) -> tuple[np.ndarray, np.ndarray]:
         aw = self.aw_x if x else self.aw_y
         c = self.space.edge_cost if x else self.space.node_cost
         if self.farkas:
@@ -246,11 +268,9 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
     rhs = int(cv.sum())
     g_idx = [k for k in range(len(ki)) if isinstance(cuts[ki[k]], Gsec)]
     if g_idx:
-        rows = [cuts[ki[k]] for k in g_idx]
-        lam = kv[g_idx]
-        aw_x = aw_x + _split_product(rows, lam)
-        for c, w in zip(rows, lam, strict=True):
-            aw_y = aw_y + int(w) * c.y_coef(space.cluster_of)
+        gy, gx = _gsec_sums([cuts[ki[k]] for k in g_idx], kv[g_idx], space.cluster_of)
+        aw_y = aw_y + gy
+        aw_x = aw_x + gx
     pair = np.zeros((m, m), np.int64)
     for k in range(len(ki)):
         c = cuts[ki[k]]

@@ -50,10 +50,9 @@ class Gsec:
     c2: int
 
     @functools.cached_property
-    def pairs(self) -> np.ndarray:
-        """Flat indices ``i * n + j`` of every ordered pair of members (``i == j`` included)."""
-        q = np.flatnonzero(self.members)
-        return (q[:, None] * len(self.members) + q[None, :]).ravel()
+    def nodes(self) -> np.ndarray:
+        """The members' node ids, ascending."""
+        return np.flatnonzero(self.members)
 
     def y_coef(self, cluster_of: np.ndarray) -> np.ndarray:
         """Coefficients of the ``y`` columns on the left-hand side (``-1`` on ``Q - C1``, ``-1``

@@ -100,20 +100,32 @@ def test_bad_duals_are_refused() -> None:
         price_duals(space, cut, {"kind": "primal"}, BITS)
     with pytest.raises(ValueError, match="not \\[index in"):
         price_duals(space, cut, {"kind": "dual", "degree": [[99, 1]]}, BITS)
-    with pytest.raises(ValueError, match="too large"):
-        price_duals(space, cut, {"kind": "dual", "degree": [[0, 2**61]]}, BITS)
+    for value in (2**61, -(2**63), 2**70):  # the last does not fit int64
+        with pytest.raises(ValueError, match="too large"):
+            price_duals(space, cut, {"kind": "dual", "degree": [[0, value]]}, BITS)
+    for entry in ([0, True], [0, 1.0], [0], [-1, 1], "0 1"):
+        with pytest.raises(ValueError, match="not \\[index in"):
+            price_duals(space, cut, {"kind": "dual", "degree": [entry]}, BITS)
+    with pytest.raises(ValueError, match="repeated"):
+        price_duals(space, cut, {"kind": "dual", "degree": [[0, 1], [0, 2]]}, BITS)
+    numpy_ints = {"kind": "dual", "degree": [[np.int64(0), np.int32(3)]]}  # accepted as ints
+    assert price_duals(space, cut, numpy_ints, BITS).aw_y[0] == -6
 
 
-def test_the_pair_sums_of_subtour_rows_are_exact() -> None:
-    """Each gsec row's dual summed over its node pairs equals the exact product M'diag(w)M, also
-    for duals near the largest allowed (no float rounding in the halves)."""
-    from gtsp_bench.proof.bounds import _split_product
+def test_the_sums_of_subtour_rows_are_exact() -> None:
+    """The gsec rows' duals summed over their node pairs equal the exact product M'diag(w)M, and
+    over the y columns each row's coefficients times its dual, also for duals near the largest
+    allowed (no float rounding anywhere)."""
+    from gtsp_bench.proof.bounds import _gsec_sums
 
     rng = np.random.default_rng(3)
-    n = 40
-    rows = [Gsec(rng.random(n) < p, 0, 1) for p in rng.random(60)]
+    n, cluster_of = 40, np.arange(40) // 4
+    rows = [Gsec(rng.random(n) < p, *rng.choice(10, 2, replace=False)) for p in rng.random(60)]
     rows = [r for r in rows if r.members.any()]
-    w = -rng.integers(0, 2**58 // len(rows), len(rows))
+    w = -rng.integers(2**57 // len(rows), 2**58 // len(rows), len(rows))
     mask = np.array([r.members for r in rows]).astype(object)
-    exact = (mask.T * w.astype(object)) @ mask
-    assert (_split_product(rows, w).astype(object) == exact).all()
+    exact_x = (mask.T * w.astype(object)) @ mask
+    exact_y = sum(int(wk) * r.y_coef(cluster_of).astype(object) for r, wk in zip(rows, w, strict=True))
+    got_y, got_x = _gsec_sums(rows, w, cluster_of)
+    assert got_x.dtype == got_y.dtype == np.int64
+    assert (got_x.astype(object) == exact_x).all() and (got_y.astype(object) == exact_y).all()

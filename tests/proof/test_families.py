@@ -115,8 +115,8 @@ def test_bad_sets_are_refused_with_the_reason(cut: dict, reason: str) -> None:
         parse_cut(cut, tiny(0).cluster_of)
 
 
-def test_gsec_pairs_are_every_ordered_pair_of_members() -> None:
-    """``Gsec.pairs`` lists ``i * n + j`` for every ordered pair of members, ``i == j`` too."""
+def test_gsec_nodes_are_its_members_ascending() -> None:
+    """``Gsec.nodes`` lists the member nodes in order."""
     members = np.zeros(5, dtype=bool)
-    members[[1, 3]] = True
-    assert sorted(Gsec(members, 0, 1).pairs.tolist()) == [6, 8, 16, 18]
+    members[[3, 1]] = True
+    assert Gsec(members, 0, 1).nodes.tolist() == [1, 3]
