@@ -64,6 +64,12 @@ class Space:
         integral = bool(np.all(node == np.round(node)) and np.all(cost[edge] == np.round(cost[edge])))
         return Space(c, node, cost, edge, integral and n > 0)
 
+    @functools.cached_property
+    def max_cost(self) -> float:
+        """The largest magnitude of a column's cost (a node's or an edge column's)."""
+        return max(float(np.abs(self.edge_cost[self.edge]).max(initial=0)),
+                   float(np.abs(self.node_cost).max(initial=0)))
+
     @property
     def n_nodes(self) -> int:
         """Number of nodes."""
@@ -205,18 +211,39 @@ class Priced:
                     for cc, a in zip(c, aw, strict=True)]
         return [Fraction(float(cc)) - Fraction(int(a), self.scale) for cc, a in zip(c, aw, strict=True)]
 
+    @functools.cached_property
+    def _negative(self) -> tuple[np.ndarray, np.ndarray]:
+        """Masks of the y and edge columns whose reduced cost may be below 0."""
+        (ry, ey), (rx, ex) = self.approx(False), self.approx(True)
+        return ry < ey, self.space.edge & (rx < ex)
+
+    def _exact_sum(self, i: np.ndarray, j: np.ndarray | None, clip: bool) -> Fraction:
+        """The exact sum of the reduced costs of y columns ``i`` (``j`` None) or edge columns
+        ``(i, j)``, each taken at most 0 if ``clip``: in int64 numerators over the scale where
+        the costs are integers (no Fraction per column), else as fractions."""
+        if not (self.farkas or self.space.integral):
+            return sum((min(v, 0) if clip else v for v in self.exact(i, j)), Fraction(0))
+        aw = self.aw_y[i] if j is None else self.aw_x[i, j]
+        if self.farkas:
+            num = -aw
+        else:  # |cost * scale| < 2**60 (price_duals) and |A'w| < 2**60: no overflow
+            c = self.space.node_cost[i] if j is None else self.space.edge_cost[i, j]
+            num = np.rint(c).astype(np.int64) * self.scale - aw
+        if clip:
+            num = np.minimum(num, 0)
+        return Fraction(sum(num.tolist()), self.scale)
+
     def bound(self, domain: Domain) -> Fraction:
         """``b'w + sum_j min(r_j l_j, r_j u_j)`` over the domain, exactly."""
         total = Fraction(self.rhs, self.scale)
-        for is_x, state in ((False, domain.y), (True, domain.x)):
-            r, err = self.approx(is_x)
-            valid = self.space.edge if is_x else np.ones(len(state), dtype=bool)
-            one = np.nonzero(valid & (state == 1))
-            maybe = np.nonzero(valid & (state == -1) & (r < err))
-            for where, clip in ((one, False), (maybe, True)):
-                vals = self.exact(where[0], where[1] if is_x else None)
-                total += sum((min(v, 0) if clip else v for v in vals), Fraction(0))
-        return total
+        neg_y, neg_x = self._negative
+        y, x = domain.y, domain.x
+        total += self._exact_sum(np.flatnonzero(y == 1), None, False)
+        total += self._exact_sum(np.flatnonzero(neg_y & (y == -1)), None, True)
+        i, j = np.nonzero(self.space.edge & (x == 1))
+        total += self._exact_sum(i, j, False)
+        i, j = np.nonzero(neg_x & (x == -1))
+        return total + self._exact_sum(i, j, True)
 
     def fixable(self, domain: Domain, room: Fraction) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
         """Free columns whose reduced cost exceeds ``room``: fixed to 1 they raise the bound by
@@ -284,7 +311,7 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
     if pair.any():
         aw_x = aw_x + pair[space.cluster_of[:, None], space.cluster_of[None, :]]
     scale = 2**bits
-    big = float(np.abs(space.edge_cost[space.edge]).max(initial=0)) * scale >= _LIMIT // 4
+    big = space.max_cost * scale >= _LIMIT // 4
     if kind != "farkas" and space.integral and big:
         raise ValueError("costs too large for the dual scale")
     return Priced(space, scale, kind == "farkas", rhs, aw_y, aw_x)

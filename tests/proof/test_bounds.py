@@ -49,7 +49,8 @@ def test_random_duals_bound_every_tour_of_the_domain(seed: int) -> None:
 
 
 def test_the_bound_is_exact() -> None:
-    """Against a plain fraction sum over every column (an integer-cost GTSPLIB file)."""
+    """Against a plain fraction sum over every column (an integer-cost GTSPLIB file), in the
+    free domain and in one with columns fixed to 1 and to 0."""
     problem = price(read_instance(GTSPLIB / "11berlin52.gtsp.gz"), None)
     space = Space.of(problem)
     assert space.integral
@@ -57,23 +58,38 @@ def test_the_bound_is_exact() -> None:
     cuts = [parse_cut({"family": "gsec", "Q": list(range(5 * k, 5 * k + 9)), "C1": 0, "C2": 9},
                       space.cluster_of) for k in range(4)]
     proof = _random_proof(rng, space.n_nodes, space.n_clusters, len(cuts))
-    got = price_duals(space, cuts, proof, BITS).bound(Domain.free(space))
+    proof["degree"] = [[i, 20 * v] for i, v in proof["degree"]]  # some edges priced below 0
+    priced = price_duals(space, cuts, proof, BITS)
     scale = Fraction(1, 2**BITS)
     u = {c: v * scale for c, v in proof["cluster"]}
     pi = {i: v * scale for i, v in proof["degree"]}
     lam = [v * scale for _, v in proof["cuts"]]
-    want = sum(u.values(), Fraction(0))
+    reduced = {}  # column (i, -1) or (i, j): its exact reduced cost
     for i in range(space.n_nodes):
         aw = u[int(space.cluster_of[i])] - 2 * pi[i]
         for c, w in zip(cuts, lam, strict=True):
             assert isinstance(c, Gsec)
             aw += w * int(c.y_coef(space.cluster_of)[i])
-        want += min(Fraction(space.node_cost[i]) - aw, 0)
+        reduced[i, -1] = Fraction(space.node_cost[i]) - aw
     for i, j in zip(*np.nonzero(space.edge), strict=True):
         aw = pi[i] + pi[j] + sum((w for c, w in zip(cuts, lam, strict=True)
                                   if c.members[i] and c.members[j]), Fraction(0))
-        want += min(Fraction(space.edge_cost[i, j]) - aw, 0)
-    assert got == want
+        reduced[int(i), int(j)] = Fraction(space.edge_cost[i, j]) - aw
+    fixed = Domain.free(space)
+    kinds = set()
+    for is_y in (True, False):  # of each sign, node and edge columns fixed to 1 and to 0
+        for sign in (1, -1):
+            cols = [c for c, r in reduced.items() if (c[1] == -1) == is_y and r * sign > 0]
+            for col, value in zip(cols, (1, 0), strict=False):
+                fixed.set(*col, value)
+                kinds.add((is_y, sign, value))
+    assert {(False, 1, 1), (False, -1, 1), (True, -1, 1), (False, -1, 0)} <= kinds
+    for domain in (Domain.free(space), fixed):
+        want = sum(u.values(), Fraction(0))
+        for (i, j), r in reduced.items():
+            state = domain.get(i, j)
+            want += r if state == 1 else min(r, 0) if state == -1 else 0
+        assert priced.bound(domain) == want
 
 
 def test_farkas_shows_an_empty_domain() -> None:
