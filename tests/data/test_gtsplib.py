@@ -321,14 +321,14 @@ _CERTIFIED = [r for r in gtsplib.best_known().values() if r.certificate]
 
 def test_certificates_are_named_for_proven_rows_and_shipped():
     """Every named certificate is a shipped file of a proven row, every shipped file is named,
-    and together they stay under 35 MB (a proof of about 1,400 leaves of 4,000 cuts, 201pr1002's,
-    takes 13.9 MB)."""
+    and together they stay under 50 MB (a proof of about 1,400 leaves of 4,000 cuts, 201pr1002's,
+    takes 13.9 MB; 212u1060's 13.4 MB)."""
     assert len(_CERTIFIED) >= 40
     for ref in _CERTIFIED:
         assert ref.proven and (GTSPLIB / ref.certificate).is_file(), ref.name
     shipped = {p.name for p in (GTSPLIB / "proofs").glob("*.cert.json.gz")}
     assert shipped == {ref.certificate.split("/")[-1] for ref in _CERTIFIED}
-    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 35_000_000
+    assert sum((GTSPLIB / r.certificate).stat().st_size for r in _CERTIFIED) < 50_000_000
 
 
 @pytest.mark.parametrize("ref", _CERTIFIED, ids=lambda r: r.name)
