@@ -288,7 +288,7 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
     pi = np.zeros(n, np.int64)
     pi[di] = dv
     if 4 * (int(np.abs(u).max(initial=0)) + 2 * int(np.abs(pi).max(initial=0))
-            + 2 * int(np.abs(kv).sum())) >= _LIMIT:
+            + 2 * sum(map(abs, kv.tolist()))) >= _LIMIT:  # Python ints: no wrap
         raise ValueError("dual values too large to sum exactly")
     aw_y = u[space.cluster_of] - 2 * pi
     aw_x = pi[:, None] + pi[None, :]

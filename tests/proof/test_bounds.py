@@ -122,6 +122,9 @@ def test_bad_duals_are_refused() -> None:
     for entry in ([0, True], [0, 1.0], [0], [-1, 1], "0 1"):
         with pytest.raises(ValueError, match="not \\[index in"):
             price_duals(space, cut, {"kind": "dual", "degree": [entry]}, BITS)
+    many = {"kind": "dual", "cuts": [[0, -(2**58)]] + [[k, -(2**58)] for k in range(1, 64)]}
+    with pytest.raises(ValueError, match="too large to sum"):  # their sum would wrap in int64
+        price_duals(space, cut * 64, many, BITS)
     with pytest.raises(ValueError, match="repeated"):
         price_duals(space, cut, {"kind": "dual", "degree": [[0, 1], [0, 2]]}, BITS)
     numpy_ints = {"kind": "dual", "degree": [[np.int64(0), np.int32(3)]]}  # accepted as ints
