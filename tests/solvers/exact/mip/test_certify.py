@@ -4,6 +4,7 @@ and degree rows it names, is the LP's row; a certificate only of a proven solve.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -171,3 +172,35 @@ def test_an_infeasible_lp_gives_a_farkas_proof_the_checker_accepts() -> None:
 def _any_solution(problem) -> tuple[list[int], list[int]]:
     k = problem.instance.n_clusters
     return list(range(k)), [0] * k
+
+
+def test_fewer_root_fixings_that_do_not_check_fall_back_to_all(tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    """The writer tries shorter lists of root fixings and keeps one only if the checker accepts
+    the certificate (``compact_certificate(strict=True)`` raises otherwise); here the checker is
+    made to refuse both, so the written certificate has every root fixing and still proves the
+    optimum."""
+    from gtsp_bench.solvers.exact.mip import certify
+
+    from gtsp_bench.proof import ProofError, check_certificate
+    from gtsp_bench.proof.compact import compact_certificate
+    from gtsp_bench.proof.format import read_certificate
+
+    calls = []
+
+    def refusing(instance: Any, cert: dict, trim: bool = True, strict: bool = False) -> dict:
+        calls.append((strict, len(cert["nodes"][0].get("fix", []))))
+        if strict:
+            raise ProofError("refused for the test")
+        return compact_certificate(instance, cert, trim=trim)
+
+    monkeypatch.setattr(certify, "compact_certificate", refusing)
+    inst = generate_instance(12, 5, seed=4)
+    path = tmp_path / "c.cert.json.gz"
+    sol = Milp(certificate=str(path)).solve(inst, 0.5, time_limit=60)
+    assert sol.status == "optimal"
+    full = calls[-1][1]
+    assert [c[0] for c in calls] == [True, True, False] and full > 1
+    assert all(n <= full for _, n in calls)
+    cert = read_certificate(path)
+    assert len(cert["nodes"][0]["fix"]) == full and check_certificate(inst, cert).proven
