@@ -26,7 +26,7 @@ import scipy.sparse as sp
 
 from gtsp_bench.checks import is_int
 from gtsp_bench.problem import Problem
-from gtsp_bench.proof.families import Blossom, Cut, Gsec
+from gtsp_bench.proof.families import Blossom, Cut, Gsec, member_y_coef
 
 #: Largest magnitude of any scaled sum (int64 with room).
 _LIMIT = 2**62
@@ -154,7 +154,7 @@ def _gsec_sums(rows: list[Gsec], weights: np.ndarray, cluster_of: np.ndarray
     cl = cluster_of[indices]
     c1 = np.array([r.c1 for r in rows])[row_of]
     c2 = np.array([r.c2 for r in rows])[row_of]
-    y_coef = -((cl != c1).astype(np.int64) + (cl == c2))  # Gsec.y_coef, entry by entry
+    y_coef = member_y_coef(cl, c1, c2)
     shape = (len(rows), n)
     aw_y = sp.csr_array((y_coef, indices, indptr), shape=shape).T @ weights
     members = sp.csr_array((np.ones(len(indices), np.int64), indices, indptr), shape=shape)

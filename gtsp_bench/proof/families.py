@@ -54,11 +54,12 @@ class Gsec:
         """The members' node ids, ascending."""
         return np.flatnonzero(self.members)
 
-    def y_coef(self, cluster_of: np.ndarray) -> np.ndarray:
-        """Coefficients of the ``y`` columns on the left-hand side (``-1`` on ``Q - C1``, ``-1``
-        more on ``Q & C2``)."""
-        q = self.members
-        return -((q & (cluster_of != self.c1)).astype(np.int64) + (q & (cluster_of == self.c2)))
+
+def member_y_coef(cluster: np.ndarray, c1: Any, c2: Any) -> np.ndarray:
+    """The ``y`` coefficient of a member node of cluster ``cluster`` in a gsec row of clusters
+    ``c1``, ``c2`` (arrays broadcast, so that many rows' members are done at once): ``-1`` outside
+    ``C1``, ``-1`` more inside ``C2``."""
+    return -((cluster != c1).astype(np.int64) + (cluster == c2))
 
 
 @dataclass(frozen=True)
