@@ -79,6 +79,20 @@ def time_to_target(points: Sequence[Point], reference: float, target: float,
     return math.nan
 
 
+def proof_time(points: Sequence[Point], objective: float, tolerance: float) -> float:
+    """The first time the bound is within ``tolerance`` of ``objective`` (the answer's cost): when
+    a solve that proved its answer optimal had done so, before any work after its search (a
+    certificate written, say); NaN when no point says so.
+
+    With integer costs a search proves its tour once the bound passes the cost less 1, so
+    ``tolerance`` 1 there.
+    """
+    for time_s, _, bound in points:
+        if bound is not None and bound >= objective - tolerance - 1e-9 * abs(objective):
+            return time_s
+    return math.nan
+
+
 def format_trajectory(points: Sequence[Point]) -> str:
     """``time:objective[:bound]`` points joined by ``;`` (times to 4 significant digits)."""
     return ";".join(f"{t:.4g}:{o:.10g}" + ("" if b is None else f":{b:.10g}") for t, o, b in points)
@@ -103,5 +117,5 @@ def metrics(points: Sequence[Point], reference: float, horizon: float) -> dict[s
 
 __all__ = [
     "TARGETS", "format_trajectory", "metrics", "parse_trajectory", "points_of", "primal_gap",
-    "primal_integral", "time_to_target",
+    "primal_integral", "proof_time", "time_to_target",
 ]

@@ -13,6 +13,7 @@ from gtsp_bench.bench.anytime import (
     points_of,
     primal_gap,
     primal_integral,
+    proof_time,
     time_to_target,
 )
 
@@ -63,3 +64,11 @@ def test_the_compact_trajectory_round_trips():
     points = [(0.001234, 1549.261192, None), (0.5, 1443.592956, 1400.25)]
     assert parse_trajectory(format_trajectory(points)) == points
     assert parse_trajectory("") == []
+
+
+def test_proof_time_is_when_the_bound_first_meets_the_answer():
+    """Integer costs: the bound within 1 of the cost; a bound short of it, or none, is no proof."""
+    points = [(1.0, 110.0, None), (2.0, 105.0, 98.5), (3.0, 105.0, 99.0), (9.0, 105.0, 105.0)]
+    assert proof_time(points, 100.0, 1.0) == 3.0
+    assert proof_time(points, 105.0, 0.0) == 9.0
+    assert math.isnan(proof_time(points[:2], 100.0, 1.0))

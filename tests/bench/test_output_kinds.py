@@ -122,7 +122,8 @@ def test_a_narrowed_run_leaves_the_docs_table_alone(tmp_path):
 def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour():
     """exact-frontier's table: a line per file of the benchmark (20, 493-1,084 nodes); a file
     with a solve shows its bound's gap to the better of its tour and the best-known tour, a
-    file without one its best_known.csv status."""
+    file without one its best_known.csv status; a proof with a certificate its seconds to the
+    proof and the certificate's after."""
     from gtsp_bench.data import gtsplib
 
     bench = BENCHMARKS["exact-frontier"]
@@ -135,7 +136,8 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
               objective=known["131p654"].value, lower_bound=known["131p654"].value, runtime_s=229.5),
         _rows(instance="132d657", solver="milp", label="milp certificate=true", status="optimal",
               seed=0, objective=known["132d657"].value, lower_bound=known["132d657"].value,
-              runtime_s=1160.0, note="certificate checked: proven optimal: 22498 (proofs/x.cert.json.gz)"),
+              runtime_s=1160.0, note="certificate checked: proven optimal: 22498 (proofs/x.cert.json.gz)",
+              trajectory="0.5:22600:22000;1100:22498:22496.5;1102:22498:22497;1160:22498:22498"),
         _rows(instance="145u724", solver="milp", label="milp", status="failed", objective=math.nan,
               runtime_s=12.0),
     ])
@@ -147,7 +149,8 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     line = next(x for x in lines if x.startswith("| 131p654 |"))
     assert "(optimal) | proven (milp, seed 1) | 230 |" in line and line.endswith("| 0.000 % |")
     line = next(x for x in lines if x.startswith("| 132d657 |"))
-    assert "| proven, certificate checked (milp certificate=true, seed 0) | 1160 |" in line
+    # proven when the bound passed 22,497 (integer costs), the certificate written after
+    assert "| proven, certificate checked (milp certificate=true, seed 0) | 1102 (+58 certificate) |" in line
     line = next(x for x in lines if x.startswith("| 99d493 |"))
     assert "not run; proven earlier, certificate shipped" in line
     open_file = next(r.name for r in known.values()
