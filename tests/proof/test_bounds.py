@@ -155,3 +155,30 @@ def test_the_sums_of_subtour_rows_are_exact() -> None:
     got_y, got_x = _gsec_sums(rows, w, cluster_of)
     assert got_x.dtype == got_y.dtype == np.int64
     assert (got_x.astype(object) == exact_x).all() and (got_y.astype(object) == exact_y).all()
+
+
+@pytest.mark.parametrize("kind", ["dual", "farkas"])
+def test_the_float_reduced_costs_are_within_their_error_bound(kind: str) -> None:
+    """The float reduced costs (they choose the columns summed exactly and those fixed by
+    reduced cost) are within the stated error of the exact ones on every column, with fractional
+    costs and duals near the largest allowed, whose sums floats cannot hold exactly."""
+    rng = np.random.default_rng(5)
+    n, cluster_of = 30, np.arange(30) // 3
+    cost = rng.random((n, n)) * 1e6
+    edge = np.triu(cluster_of[:, None] != cluster_of[None, :], 1)
+    space = Space(cluster_of, rng.random(n) * 1e3, (cost + cost.T) / 3, edge, False)
+    bits = 40
+    proof = {"kind": kind,
+             "cluster": [[c, int(rng.integers(-2**56, 2**56))] for c in range(10)],
+             "degree": [[i, int(rng.integers(-2**56, 2**56))] for i in range(n)], "cuts": []}
+    priced = price_duals(space, [], proof, bits)
+    scale = 2**bits
+    for is_x in (False, True):
+        r, err = priced.approx(is_x)
+        cols = list(zip(*np.nonzero(edge), strict=True)) if is_x else [(i,) for i in range(n)]
+        worst = Fraction(0)
+        for col in cols:
+            aw = Fraction(int((priced.aw_x if is_x else priced.aw_y)[col]), scale)
+            c = 0 if kind == "farkas" else Fraction((space.edge_cost if is_x else space.node_cost)[col])
+            worst = max(worst, abs(Fraction(r[col]) - (c - aw)))
+        assert 0 < worst <= Fraction(err)  # (floats did round: the bound is tested)
