@@ -140,6 +140,8 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
               trajectory="0.5:22600:22000;1100:22498:22496.5;1102:22498:22497;1160:22498:22498"),
         _rows(instance="145u724", solver="milp", label="milp", status="failed", objective=math.nan,
               runtime_s=12.0),
+        _rows(instance="200dsj1000", solver="milp", label="milp", status="time_limit", seed=0,
+              objective=9187884, lower_bound=9187873, runtime_s=3600.1),
     ])
     text = frontier_block(bench, df, "cmd")
     lines = [x for x in text.splitlines() if x.startswith("| ")][1:]
@@ -159,7 +161,9 @@ def test_frontier_block_lists_every_file_and_certifies_against_the_better_tour()
     failed = next(x for x in lines if x.startswith("| 145u724 |"))
     assert failed.endswith("| failed (milp, seed 0) | 12 | - | - | - |")
     proven = sum(r.proven for r in known.values() if 493 <= r.nodes <= 1084 and r.symmetric)
-    assert f"{proven} of 20 files proven optimal (2 by the solves below); 4 of 20 run." in text
+    # a gap that is not 0 never prints as 0.000 % (11 below 9,187,884)
+    assert next(x for x in lines if x.startswith("| 200dsj1000 |")).endswith("| 0.0001 % |")
+    assert f"{proven} of 20 files proven optimal (2 by the solves below); 5 of 20 run." in text
 
 
 def test_glns_targets_block_counts_files_runs_and_the_worst():
