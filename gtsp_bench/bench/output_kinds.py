@@ -94,13 +94,21 @@ def gap_time_cell(rows: pd.DataFrame, ms: bool = False) -> str:
     return f"{gap} {time}{star}{part}"
 
 
+def _gap_text(pct: float) -> str:
+    """A bound gap in per cent, to 0.001; one that would print as 0.000 but is not 0 shows its
+    first significant digit (0.0001: a bound 11 below 9,187,884), so it never reads as a proof."""
+    if 0.0 < pct < 0.0005:
+        return f"{pct:.{-math.floor(math.log10(pct))}f}"
+    return f"{pct:.3f}"
+
+
 def proof_cell(rows: pd.DataFrame) -> str:
     """Proven count, median time to the answer and the largest gap to the solver's own bound."""
     proven = int((rows["status"] == "optimal").sum())
     times = rows["runtime_s"].dropna()
     median = f"{statistics.median(times):.2f}s" if len(times) else "-"
     worst = rows["bound_gap_pct"].max()
-    gap = "" if proven == len(rows) or not math.isfinite(worst) else f", bound gap <= {worst:.3f}%"
+    gap = "" if proven == len(rows) or not math.isfinite(worst) else f", bound gap <= {_gap_text(worst)}%"
     return f"{proven}/{len(rows)} proven, {median}{gap}"
 
 
@@ -224,17 +232,6 @@ def _value(v: float) -> str:
     return f"{v:,.0f}" if float(v).is_integer() else f"{v:,.2f}"
 
 
-def _gap_pct(upper: float, lower: float) -> str:
-    """The gap of ``lower`` below ``upper`` in per cent, to 0.001; a gap that would print as 0.000
-    but is not 0 shows its first significant digit (200dsj1000 once ended 11 below 9,187,884)."""
-    if not math.isfinite(lower):
-        return "-"
-    pct = 100.0 * (upper - lower) / upper
-    if 0.0 < pct < 0.0005:
-        return f"{pct:.{-math.floor(math.log10(pct))}f} %"
-    return f"{pct:.3f} %"
-
-
 def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:
     """The exact page's GTSPLIB frontier (``exact-frontier``): a line per file of the benchmark
     and solve; a file without a solve shows its ``best_known.csv`` status. The certified gap is
@@ -259,7 +256,7 @@ def frontier_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str
             what += f", {verdict}" if verdict else ""
             upper = min(row.objective, r.value) if math.isfinite(row.objective) else r.value
             lb = row.lower_bound
-            gap = _gap_pct(upper, lb)
+            gap = f"{_gap_text(100.0 * (upper - lb) / upper)} %" if math.isfinite(lb) else "-"
             secs = f"{row.runtime_s:.0f}"
             if verdict and row.status == "optimal" and isinstance(row.trajectory, str):
                 at = proof_time(parse_trajectory(row.trajectory), row.objective, 1.0)  # integer costs

@@ -79,6 +79,9 @@ def test_doc_tables_are_pivots_of_the_rows():
     text = pivot_markdown(df, "set", "label", proof_cell, "set")
     assert text.splitlines()[0] == "| set | lns | milp |"
     assert "1/1 proven" in text and "0/1 proven, 0.50s, bound gap <= 0.500%" in text
+    # a worst gap that is not 0 never prints as 0.000%
+    tiny = _rows(label="milp", status="time_limit", bound_gap_pct=0.00012)
+    assert proof_cell(tiny).endswith("bound gap <= 0.0001%")
 
 
 def test_committed_doc_blocks_are_what_their_rows_give():
