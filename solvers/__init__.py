@@ -34,6 +34,9 @@ BUILTIN: tuple[Builtin, ...] = (
             "paper's greedy: next (cluster, head) with the least added weighted energy"),
     Builtin("greedy+ls", f"{_H}.local_search:GreedyLS",
             "greedy, then the shared 2-opt/or-opt/heads local search"),
+    Builtin("greedy+ils", f"{_H}.ils:GreedyILS",
+            "greedy, then double-bridge kicks + lns's local search for 0.01 s x K (learned control)",
+            bench=False),
     Builtin("aco", f"{_H}.aco:Aco",
             "paper's ACO baseline (Yang et al. 2008 ant system; 30 ants, 200 iterations)"),
     Builtin("aco+ls", f"{_H}.aco:AcoLS", "aco, then the shared 2-opt/or-opt/heads local search"),
@@ -60,7 +63,7 @@ BUILTIN: tuple[Builtin, ...] = (
             "local-view policy re-encoded each step (imitation of lns), greedy; -p starts=S rotated views"),
     Builtin("local-search", f"{_L}.search:LocalSearchSolver",
             "local-view policy as a search: multi-start, 2-opt/or-opt, segments re-decoded by the "
-            "policy (0.01 s x K)", bench=False),
+            "policy, then kicks (0.01 s x K)", bench=False),
     Builtin("pyvrp", f"{_P}.pyvrp:PyVRPPeer",
             "PyVRP 0.14 as a peer: one-vehicle VRP with mutually exclusive client groups",
             bench=False),

@@ -274,7 +274,7 @@ def test_broken_plugin_by_name_is_an_input_error(monkeypatch):
 
 # ---------------------------------------------------------------------- asymmetric costs
 #: The built-in solvers that declare ``asymmetric = True``.
-ASYMMETRIC_SOLVERS = {"brute", "dp", "greedy", "aco", "lns", "pyvrp", "ortools", "lkh"}
+ASYMMETRIC_SOLVERS = {"brute", "dp", "greedy", "greedy+ils", "aco", "lns", "pyvrp", "ortools", "lkh"}
 REFUSAL = "handles symmetric costs only (this instance is asymmetric)"
 
 
