@@ -258,6 +258,7 @@ _LEARNED = (
     run("local", "local policy=l4", checkpoint=_L4),
     run("local", "local policy=l4-tiled", checkpoint=_L4_TILED),
     run("local-search"),
+    run("greedy+ils"),  # local-search's kicks from the greedy tour: what the policy adds
 )
 _LARGE_UAV = tuple(f"uav-K{k}-N20-s1" for k in (20, 50, 100, 200))
 _TABLE_GROUPS = (

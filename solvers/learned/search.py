@@ -18,12 +18,17 @@ One greedy decode is the policy's best guess; a search spends more time for a be
    ``ls`` again. Rounds go on until the time is spent (the last round is cut to the length that
    fits, judged by the previous round's seconds per step) or ``patience`` rounds in a row found
    nothing better.
+4. **Kicks** (the last ``kick_share`` of the budget, and whatever the rounds left; none below 8
+   clusters, where the search ends after its rounds): the iterated local search of
+   :func:`gtsp_bench.solvers.heuristics.ils.kick` from the best tour (double-bridge kicks, each
+   followed by the lns kernels' local search). ``greedy+ils`` runs the same from the greedy tour:
+   the learned benchmark's control for what the policy adds.
 
 The budget is ``seconds_per_cluster`` * K (default 0.01 s: 1 s at K = 100, 2 s at K = 200), or
-the runner's time limit where smaller; the rounds stop :data:`MARGIN` of it early, so that the
-last local search and the final pricing end within it. The search is seeded (the segments and
-frames); on a loaded machine fewer rounds fit in the budget, so results depend on the machine's
-speed.
+the runner's time limit where smaller; the rounds end at ``1 - kick_share`` of it, the kicks
+:data:`MARGIN` of it early, so that the final pricing ends within it. The search is seeded (the
+segments, frames and kicks); on a loaded machine fewer rounds and kicks fit in the budget, so
+results depend on the machine's speed.
 """
 
 from __future__ import annotations
@@ -33,6 +38,8 @@ import time
 
 import numpy as np
 import torch
+from gtsp_bench.solvers.heuristics import lns_kernels as kernels
+from gtsp_bench.solvers.heuristics.ils import kick
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch
 from gtsp_bench.solvers.learned.env import (
     EnvBatch,
@@ -52,9 +59,11 @@ from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
 REL_TOL = 1e-9
-#: Share of the budget kept back for what follows the last round (its local search, the
-#: final pricing), so that a solve ends within its budget.
+#: Share of the budget kept back for what follows the search (the last round's local search
+#: when there are no kicks, the final pricing), so that a solve ends within its budget.
 MARGIN = 0.03
+#: Default ``kick_share``.
+KICK_SHARE = 0.5
 
 
 def random_maps(n: int, generator: torch.Generator) -> torch.Tensor:
@@ -145,8 +154,9 @@ class LocalSearchSolver(LearnedSolver):
     per instance is this times K, default 0.01), ``width`` (decodes per round, default 16),
     ``min_segment``, ``max_segment`` (segment lengths drawn, default 2 to 60 clusters),
     ``patience`` (rounds in a row without a better tour before it stops, default 100), ``ls``
-    (the shared local search after each better tour, default true), ``threads``. Heads are
-    always optimal for the order.
+    (the shared local search after each better tour, default true), ``kick_share`` (the share of
+    the budget, at its end, for kicks: :func:`~gtsp_bench.solvers.heuristics.ils.kick`; default
+    KICK_SHARE, 0: none), ``threads``. Heads are always optimal for the order.
     """
 
     model_name = "local"
@@ -156,7 +166,7 @@ class LocalSearchSolver(LearnedSolver):
     def __init__(self, checkpoint: str | None = None, starts: int = 8,
                  seconds_per_cluster: float = 0.01, width: int = 16, min_segment: int = 2,
                  max_segment: int = 60, patience: int = 100, ls: bool = True,
-                 threads: int = 1) -> None:
+                 kick_share: float = KICK_SHARE, threads: int = 1) -> None:
         super().__init__(checkpoint, "optimal", samples=0, threads=threads)
         self.starts = check_int("starts", starts, 1)
         self.seconds_per_cluster = check_float("seconds_per_cluster", seconds_per_cluster, 0.0,
@@ -166,6 +176,9 @@ class LocalSearchSolver(LearnedSolver):
         self.max_segment = check_int("max_segment", max_segment, self.min_segment)
         self.patience = check_int("patience", patience, 1)
         self.ls = check_bool("ls", ls)
+        self.kick_share = check_float("kick_share", kick_share, 0.0, 1.0, open_low=False)
+        if self.kick_share > 0:
+            kernels.warm_up()  # compiled or loaded here, not in a solve's clock
 
     def solve_batch(self, instances: list[Instance], omegas: list[float], *, seed: int = 0,
                     progress: Progress = no_progress) -> list[Solution]:
@@ -183,13 +196,15 @@ class LocalSearchSolver(LearnedSolver):
         if time_limit is not None:
             budget = min(budget, float(time_limit))
         deadline = start + budget * (1.0 - MARGIN)
+        rounds_end = start + budget * (1.0 - MARGIN) * (1.0 - self.kick_share)
         torch.set_num_threads(self.threads)
         env = env_from_instances([instance], [omega])
-        search = LocalSearch(price(instance, omega)) if self.ls else None
+        problem = price(instance, omega)
+        search = LocalSearch(problem) if self.ls else None
         gen = torch.Generator().manual_seed(int(seed))
         rng = np.random.default_rng([int(seed), 7])
         k = instance.n_clusters
-        rounds = better = 0
+        rounds = better = kicks = 0
         with torch.inference_mode():
             t_decode = time.perf_counter()
             orders, _ = self.model.decode(env, "greedy", starts=self.starts)
@@ -200,7 +215,7 @@ class LocalSearchSolver(LearnedSolver):
             order, heads, cost = orders[j], hs[j], float(costs[j])
             progress(cost)
             if self.ls:
-                order, heads, cost = self._local_search(search, env, order, heads, cost, deadline)
+                order, heads, cost = self._local_search(search, env, order, heads, cost, rounds_end)
                 progress(cost)
             stall = 0
             shortest = min(self.min_segment, k)
@@ -209,7 +224,7 @@ class LocalSearchSolver(LearnedSolver):
                 length = int(rng.integers(shortest, min(self.max_segment, k) + 1))
                 # the last round is cut to what fits in the time left (none starts that would
                 # end past the deadline)
-                length = min(length, int((deadline - t_round) / per_step))
+                length = min(length, int((rounds_end - t_round) / per_step))
                 if length < shortest:
                     break
                 found = self._round(env, order, heads, cost, length, rng, gen)
@@ -218,7 +233,7 @@ class LocalSearchSolver(LearnedSolver):
                     order, heads, cost = found
                     if self.ls:
                         order, heads, cost = self._local_search(search, env, order, heads, cost,
-                                                                deadline)
+                                                                rounds_end)
                     progress(cost)
                     better += 1
                     stall = 0
@@ -227,10 +242,16 @@ class LocalSearchSolver(LearnedSolver):
                 per_step = (time.perf_counter() - t_round) / length
         o = tuple(int(c) for c in order)
         h = unpad_heads(heads.tolist(), instance.sizes)
+        if self.kick_share > 0 and time.perf_counter() < deadline:
+            tour, kicked, kicks = kick(problem, problem.to_tour(o, h), deadline, seed)
+            if kicked < cost - REL_TOL * abs(cost):
+                o, h = problem.to_solution(tour)
+                progress(kicked)
         value = evaluate(instance, omega, o, h).objective
         return Solution(o, h, objective=value, status="feasible",
                         stats={"heads": "optimal", "rounds": rounds, "better": better,
-                               "budget_s": budget, "wall_s": time.perf_counter() - start})
+                               "kicks": kicks, "budget_s": budget,
+                               "wall_s": time.perf_counter() - start})
 
     def _round(self, env: EnvBatch, order: torch.Tensor, heads: torch.Tensor, cost: float,
                length: int, rng: np.random.Generator, gen: torch.Generator,

@@ -1,5 +1,6 @@
 """The local-search solver: feasible tours priced by the evaluator at K = 200, its time cap,
-never below a proven optimum, segments re-decoded in place, bad options refused."""
+never below a proven optimum, segments re-decoded in place, the budget split with the kicks, bad
+options refused."""
 
 from __future__ import annotations
 
@@ -86,7 +87,7 @@ def test_bad_options_are_refused_with_the_valid_names():
     with pytest.raises(InputError, match="options: checkpoint, starts"):
         get_solver("local-search", bogus=1)
     for bad in ({"width": 0}, {"seconds_per_cluster": -1.0}, {"max_segment": 1}, {"ls": "maybe"},
-                {"min_segment": 10, "max_segment": 5}):
+                {"min_segment": 10, "max_segment": 5}, {"kick_share": -0.1}, {"kick_share": 1.5}):
         with pytest.raises(InputError):
             LocalSearchSolver(**bad)
 
@@ -143,3 +144,18 @@ def test_a_round_gives_a_better_tour_priced_exactly_or_none(tmp_path):
             order, heads, cost = new_order, new_heads, new_cost
             improved += 1
     assert improved >= 1
+
+
+def test_kick_share_splits_the_budget_between_rounds_and_kicks(tmp_path):
+    """kick_share=0: rounds only, no kicks (the search without them); kick_share=1: kicks only,
+    no round; the answer is priced by the evaluator either way."""
+    _, path = _tiny(tmp_path)
+    inst = instance_set(1, 30, 4_343, 6)[0]
+    rounds_only = LocalSearchSolver(checkpoint=str(path), kick_share=0.0, seconds_per_cluster=0.005)
+    kicks_only = LocalSearchSolver(checkpoint=str(path), kick_share=1.0, seconds_per_cluster=0.005)
+    a = run_solver(rounds_only, inst, 0.3)
+    b = run_solver(kicks_only, inst, 0.3)
+    assert a.stats["kicks"] == 0 and a.stats["rounds"] > 0
+    assert b.stats["rounds"] == 0 and b.stats["kicks"] > 0
+    for r in (a, b):
+        assert r.objective == pytest.approx(evaluate(inst, 0.3, r.order, r.heads).objective, rel=1e-12)
