@@ -36,6 +36,15 @@ def greedy_starts(problem: Problem) -> list[int]:
     return [int(v) for v in min(problem.clusters, key=len)]
 
 
+def best_greedy_tour(problem: Problem) -> tuple[np.ndarray, float]:
+    """The cheapest of the greedy tours from :func:`greedy_starts`, and its cost (the first such
+    start on a tie)."""
+    tours = [greedy_tour(problem, s) for s in greedy_starts(problem)]
+    costs = [problem.tour_cost(t) for t in tours]
+    best = int(np.argmin(costs))
+    return tours[best], costs[best]
+
+
 class Greedy:
     """Nearest (cluster, head) pair by weighted energy, step by step."""
 
@@ -48,8 +57,6 @@ class Greedy:
     ) -> Solution:
         """Build the greedy tour (``time_limit`` and ``seed`` are not used)."""
         problem = price(instance, omega)
-        tours = [greedy_tour(problem, s) for s in greedy_starts(problem)]
-        costs = [problem.tour_cost(t) for t in tours]
-        best = int(np.argmin(costs))
-        order, heads = problem.to_solution(tours[best])
-        return Solution(order, heads, objective=costs[best], status="feasible")
+        tour, cost = best_greedy_tour(problem)
+        order, heads = problem.to_solution(tour)
+        return Solution(order, heads, objective=cost, status="feasible")

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.greedy import Greedy
+from gtsp_bench.solvers.heuristics.greedy import best_greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
 
 from gtsp_bench.checks import check_float
@@ -78,11 +78,10 @@ class GreedyILS:
         budget = self.seconds_per_cluster * instance.n_clusters
         if time_limit is not None:
             budget = min(budget, float(time_limit))
-        first = Greedy().solve(instance, omega)
-        progress(first.objective)
         problem = price(instance, omega)
-        tour, cost, kicks = kick(problem, problem.to_tour(first.order, first.heads),
-                                 begin + budget * (1.0 - MARGIN), seed)
+        first, first_cost = best_greedy_tour(problem)
+        progress(first_cost)
+        tour, cost, kicks = kick(problem, first, begin + budget * (1.0 - MARGIN), seed)
         progress(cost)
         order, heads = problem.to_solution(tour)
         return Solution(order, heads, objective=cost, status="feasible",
