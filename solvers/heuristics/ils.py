@@ -15,7 +15,7 @@ import time
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import best_greedy_tour
-from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs
+from gtsp_bench.solvers.heuristics.lns_costs import cluster_arrays, kernel_costs
 
 from gtsp_bench.checks import check_float
 from gtsp_bench.instance import Instance
@@ -41,9 +41,7 @@ def kick(problem: Problem, tour: np.ndarray, deadline: float, seed: int) -> tupl
     a kicked tour kept when it costs no more; below :data:`KICK_MIN` clusters the local search
     only. Returns the tour, its cost and the kicks done."""
     edge = kernel_costs(problem, False)
-    node = np.ascontiguousarray(problem.node_cost, dtype=np.float64)
-    start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
-    cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
+    node, start, cluster_of = cluster_arrays(problem)
     symmetric = bool(problem.symmetric)
     count = KICK_NEIGHBOURS if symmetric else max(1, problem.n_clusters - 1)
     near = kernels.neighbours(edge, start, count)

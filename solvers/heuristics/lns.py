@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import greedy_tour
-from gtsp_bench.solvers.heuristics.lns_costs import kernel_costs, points_of
+from gtsp_bench.solvers.heuristics.lns_costs import cluster_arrays, kernel_costs, points_of
 from gtsp_bench.solvers.heuristics.lns_islands import run_islands
 from gtsp_bench.solvers.heuristics.lns_macro import (
     centre_groups,
@@ -107,12 +107,7 @@ class _Search:
         self.initial = initial  #: a warm start's tour (node ids), the first tour
         self.progress = progress  #: told each better tour's cost
         self.edge = kernel_costs(problem, settings.points)
-        self.node = np.ascontiguousarray(problem.node_cost, dtype=np.float64)
-        self.start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
-        if not np.array_equal(np.repeat(np.arange(problem.n_clusters), np.diff(self.start)),
-                              problem.cluster_of):
-            raise ValueError("lns needs nodes numbered cluster by cluster")
-        self.cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
+        self.node, self.start, self.cluster_of = cluster_arrays(problem)
         self.symmetric = bool(problem.symmetric)
         n = problem.n_clusters
         count = settings.neighbours_for(n, self.symmetric)

@@ -106,3 +106,19 @@ def kernel_costs(problem: Problem, points: bool | None = None) -> np.ndarray | P
     if found is not None:
         return found
     return np.ascontiguousarray(problem.edge_cost, dtype=np.float64)
+
+
+def cluster_arrays(problem: Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What the kernels take as ``node``, ``start`` and ``cluster_of`` for ``problem``: the node
+    costs, the first node of each cluster followed by the number of nodes, and each node's cluster.
+
+    Raises
+    ------
+    ValueError
+        When the nodes are not numbered cluster by cluster (the kernels index clusters by ranges).
+    """
+    start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
+    cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
+    if not np.array_equal(np.repeat(np.arange(problem.n_clusters), np.diff(start)), cluster_of):
+        raise ValueError("the kernels need nodes numbered cluster by cluster")
+    return np.ascontiguousarray(problem.node_cost, dtype=np.float64), start, cluster_of

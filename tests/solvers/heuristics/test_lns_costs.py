@@ -8,12 +8,12 @@ import pytest
 from gtsp_bench.solvers.heuristics import lns_costs
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.lns import Lns
-from gtsp_bench.solvers.heuristics.lns_costs import ec, kernel_costs, points_of
+from gtsp_bench.solvers.heuristics.lns_costs import cluster_arrays, ec, kernel_costs, points_of
 from numba import njit
 
 from gtsp_bench.errors import InputError
 from gtsp_bench.instance import Instance
-from gtsp_bench.problem import price
+from gtsp_bench.problem import Problem, price
 
 
 @njit(cache=False)
@@ -85,13 +85,11 @@ def test_lns_searches_the_same_on_points_and_matrix(rule):
 def test_kernels_on_points_keep_the_tour_cost():
     """The local search on points returns the cost the matrix prices the tour at."""
     problem = price(_instance("CEIL_2D", seed=5, clusters=20), None)
-    start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
-    cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
+    node, start, cluster_of = cluster_arrays(problem)
     points = points_of(problem)
     near = kernels.neighbours(points, start, 5)
     assert np.array_equal(near, kernels.neighbours(problem.edge_cost, start, 5))
     t = start[:-1].copy()
-    node = np.ascontiguousarray(problem.node_cost)
     cost = kernels.local_search(t, points, node, start, near, cluster_of, 1e-9,
                                 np.ones(len(start) - 1, dtype=np.bool_), True)
     assert cost == pytest.approx(problem.tour_cost(t), abs=1e-9)
@@ -114,3 +112,19 @@ def test_cluster_distances_on_points_equal_the_matrix(rule, omega):
     want = kernels.cluster_distances(problem.edge_cost, start)
     assert np.array_equal(kernels.cluster_distances(points, start), want)
     assert np.array_equal(kernels.cluster_distances.py_func(points, start), want)
+
+
+def test_cluster_arrays_index_clusters_by_ranges():
+    """Each node lies in ``start[c] .. start[c + 1]`` of its cluster, the costs are the problem's,
+    and a problem whose clusters interleave their nodes is refused."""
+    problem = price(_instance("EUC_2D", seed=2, clusters=6), None)
+    node, start, cluster_of = cluster_arrays(problem)
+    assert start[-1] == problem.n_nodes and len(start) == problem.n_clusters + 1
+    for c, members in enumerate(problem.clusters):
+        assert list(members) == list(range(start[c], start[c + 1]))
+        assert (cluster_of[members] == c).all()
+    assert np.array_equal(node, problem.node_cost) and node.dtype == np.float64
+    mixed = Problem(problem.instance, None, np.zeros(4),
+                    (np.array([0, 2]), np.array([1, 3])), None)
+    with pytest.raises(ValueError, match="numbered cluster by cluster"):
+        cluster_arrays(mixed)
