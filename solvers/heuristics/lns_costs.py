@@ -119,6 +119,8 @@ def cluster_arrays(problem: Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """
     start = np.array([c[0] for c in problem.clusters] + [problem.n_nodes], dtype=np.int64)
     cluster_of = np.ascontiguousarray(problem.cluster_of, dtype=np.int64)
-    if not np.array_equal(np.repeat(np.arange(problem.n_clusters), np.diff(start)), cluster_of):
+    sizes = np.diff(start)
+    if (sizes < 1).any() or not np.array_equal(np.repeat(np.arange(problem.n_clusters), sizes),
+                                                cluster_of):
         raise ValueError("the kernels need nodes numbered cluster by cluster")
     return np.ascontiguousarray(problem.node_cost, dtype=np.float64), start, cluster_of

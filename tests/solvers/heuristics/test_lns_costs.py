@@ -126,5 +126,8 @@ def test_cluster_arrays_index_clusters_by_ranges():
     assert np.array_equal(node, problem.node_cost) and node.dtype == np.float64
     mixed = Problem(problem.instance, None, np.zeros(4),
                     (np.array([0, 2]), np.array([1, 3])), None)
-    with pytest.raises(ValueError, match="numbered cluster by cluster"):
-        cluster_arrays(mixed)
+    backwards = Problem(problem.instance, None, np.zeros(4),
+                        (np.array([2, 3]), np.array([0, 1])), None)
+    for bad in (mixed, backwards):
+        with pytest.raises(ValueError, match="numbered cluster by cluster"):
+            cluster_arrays(bad)
