@@ -16,18 +16,15 @@ import numpy as np
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
 from gtsp_bench.solvers.heuristics.greedy import best_greedy_tour
 from gtsp_bench.solvers.heuristics.lns_costs import cluster_arrays, kernel_costs
+from gtsp_bench.solvers.heuristics.lns_settings import LnsSettings
 
 from gtsp_bench.checks import check_float
 from gtsp_bench.instance import Instance
 from gtsp_bench.problem import Problem, price
 from gtsp_bench.solver import Progress, Solution, no_progress
 
-#: Improvements smaller than this share of the tour cost are ignored (rounding noise).
-REL_TOL = 1e-9
 #: Kicks per call of the compiled search, between looks at the clock.
 KICK_CHUNK = 64
-#: Neighbour clusters per cluster for the local search (as ``lns`` on symmetric costs).
-KICK_NEIGHBOURS = 10
 #: Fewest clusters (the depot's included) of a cycle that a double-bridge kick changes.
 KICK_MIN = 8
 #: Share of the budget kept back for the final pricing, so that a solve ends within its budget.
@@ -43,10 +40,9 @@ def kick(problem: Problem, tour: np.ndarray, deadline: float, seed: int) -> tupl
     edge = kernel_costs(problem, False)
     node, start, cluster_of = cluster_arrays(problem)
     symmetric = bool(problem.symmetric)
-    count = KICK_NEIGHBOURS if symmetric else max(1, problem.n_clusters - 1)
-    near = kernels.neighbours(edge, start, count)
+    near = kernels.neighbours(edge, start, LnsSettings().neighbours_for(problem.n_clusters, symmetric))
     t = np.array(tour, dtype=np.int64)
-    tol = REL_TOL * max(1.0, abs(kernels.tour_cost(t, edge, node)))
+    tol = kernels.REL_TOL * max(1.0, abs(kernels.tour_cost(t, edge, node)))
     kernels.seed(seed)
     cost = kernels.local_search(t, edge, node, start, near, cluster_of, tol,
                                 np.ones(problem.n_clusters, dtype=np.bool_), symmetric)
