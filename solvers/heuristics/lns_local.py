@@ -4,6 +4,8 @@ Tours and problems as in :mod:`gtsp_bench.solvers.heuristics.lns_kernels`. :func
 repeats, until none improves:
 
 * **2-opt** on the cycle with the heads kept (first improvement; symmetric costs only);
+* **segment swap** (or-3opt; directed costs only, in 2-opt's place): two consecutive runs of any
+  length trade places, neither reversed;
 * **or-opt**: a run of 2 or 3 consecutive clusters, heads and direction kept (or reversed, in the
   large-cycle search of :mod:`gtsp_bench.solvers.heuristics.lns_window`), moved next to a
   neighbour of its first or last cluster;
@@ -254,6 +256,75 @@ def or_opt(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
 
 
 @njit(cache=True, nogil=True)
+def segment_swap(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, near: np.ndarray,
+                 cluster_of: np.ndarray, tol: float, active: np.ndarray, width: int = 10) -> float:
+    """Or-3opt with fixed heads (directed costs), first improvement, in place: two consecutive
+    runs of the cycle, of any lengths, trade places, neither reversed (``a a' .. b b' .. c c'`` to
+    ``a b' .. c a' .. b c'``).
+
+    For each awake head ``a`` (``active[0]``: 2-opt's row, unused on directed costs), ``b'`` is the
+    head of one of the first ``width`` neighbours of ``a``'s cluster and ``c`` of ``a'``'s, so both
+    new edges into the moved runs are short; the partial gain must stay positive after the second
+    edge (Lin and Kernighan's rule). On directed costs the neighbour lists hold every cluster,
+    so ``width`` keeps a pass near ``n * width ** 2`` tries, not ``n ** 3``. Every arc is priced
+    in its direction. A head where none improves goes to sleep; the ends of changed edges wake.
+    Returns the saving (0: nothing improved).
+    """
+    n = len(t)
+    if n < 5:
+        return 0.0
+    gained = 0.0
+    for i in range(n):
+        if not active[0, cluster_of[t[i]]]:
+            continue
+        a, a1 = t[i], t[(i + 1) % n]
+        found = False
+        for w in range(min(width, near.shape[1])):
+            j = pos[near[cluster_of[a], w]]
+            k = (j - i) % n  # b' at i + k, b just before it
+            if k < 2:
+                continue
+            b, b1 = t[(j - 1) % n], t[j]
+            g2 = ec(edge, a, a1) + ec(edge, b, b1) - ec(edge, a, b1)
+            if g2 <= tol:
+                continue
+            for v in range(min(width, near.shape[1])):
+                m = pos[near[cluster_of[a1], v]]
+                if (m - i) % n < k:  # c must lie in b' .. a's predecessor
+                    continue
+                c, c1 = t[m], t[(m + 1) % n]
+                gain = g2 + ec(edge, c, c1) - ec(edge, c, a1) - ec(edge, b, c1)
+                if gain <= tol:
+                    continue
+                gained += gain
+                length = (m - i) % n  # a, then b' .. c, then a' .. b, then the rest
+                out = np.empty(n, dtype=np.int64)
+                out[0] = a
+                x = 1
+                for r in range(k, length + 1):
+                    out[x] = t[(i + r) % n]
+                    x += 1
+                for r in range(1, k):
+                    out[x] = t[(i + r) % n]
+                    x += 1
+                for r in range(length + 1, n):
+                    out[x] = t[(i + r) % n]
+                    x += 1
+                for r in range(n):  # a keeps its place
+                    t[(i + r) % n] = out[r]
+                    pos[cluster_of[out[r]]] = (i + r) % n
+                for z in (a, a1, b, b1, c, c1):
+                    _touch(active, cluster_of, t, pos[cluster_of[z]])
+                found = True
+                break
+            if found:
+                break
+        if not found:
+            active[0, cluster_of[a]] = False
+    return gained
+
+
+@njit(cache=True, nogil=True)
 def reopt(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
           cluster_of: np.ndarray) -> float:
     """Optimal heads for the cluster order of ``t`` (in place); returns the tour's new cost."""
@@ -330,17 +401,21 @@ def search_state(t: np.ndarray, cluster_of: np.ndarray, awake: np.ndarray,
 def move_round(t: np.ndarray, pos: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.ndarray,
                near: np.ndarray, cluster_of: np.ndarray, tol: float, active: np.ndarray,
                symmetric: bool, large: bool = False, cost: float = 0.0) -> tuple[bool, float]:
-    """One round of 2-opt (symmetric costs only), or-opt and move on ``t`` (in place): whether
-    or-opt or move changed it, and its cost after the round. ``large`` is the large-cycle path:
-    or-opt also reverses runs (on symmetric costs), move shuffles only the awake clusters, and the
-    cost after the round is ``cost`` (the cost before it) less the moves' savings, not a pass over
-    the tour."""
-    saved = two_opt(t, pos, edge, near, cluster_of, tol, active) if symmetric else 0.0
+    """One round of 2-opt (symmetric costs) or segment swap (directed costs), or-opt and move on
+    ``t`` (in place): whether segment swap, or-opt or move changed it, and its cost after the
+    round. ``large`` is the large-cycle path: or-opt also reverses runs (on symmetric costs), move
+    shuffles only the awake clusters, and the cost after the round is ``cost`` (the cost before
+    it) less the moves' savings, not a pass over the tour."""
+    if symmetric:
+        saved, swapped = two_opt(t, pos, edge, near, cluster_of, tol, active), 0.0
+    else:
+        saved, swapped = 0.0, segment_swap(t, pos, edge, near, cluster_of, tol, active)
     moved = or_opt(t, pos, edge, near, cluster_of, tol, active, large and symmetric)
     shifted = move_opt(t, pos, edge, node, start, near, cluster_of, tol, active, symmetric, large)
+    changed = moved > 0.0 or shifted > 0.0 or swapped > 0.0
     if large:
-        return moved > 0.0 or shifted > 0.0, cost - (saved + moved + shifted)
-    return moved > 0.0 or shifted > 0.0, tour_cost(t, edge, node)
+        return changed, cost - (saved + swapped + moved + shifted)
+    return changed, tour_cost(t, edge, node)
 
 
 @njit(cache=True, nogil=True)
@@ -351,8 +426,8 @@ def local_search(t: np.ndarray, edge: np.ndarray, node: np.ndarray, start: np.nd
 
     ``awake`` marks the clusters to look at first (with their tour neighbours): those just
     inserted, or all of them. Without ``symmetric`` (directed costs) there is no 2-opt: it reverses
-    part of the tour, priced as if each edge cost the same both ways; or-opt, move and re-opt price
-    every edge in its direction.
+    part of the tour, priced as if each edge cost the same both ways; segment swap takes its place,
+    and it, or-opt, move and re-opt price every edge in its direction.
     """
     n = len(t)
     pos, active = search_state(t, cluster_of, awake, 3)

@@ -546,14 +546,16 @@ def test_mirror_trial_starts_from_the_reversed_best(monkeypatch):
 
 def test_mirror_trial_leaves_the_reversed_trap_on_35ftv170():
     """On 35ftv170 (AGTSP, optimum 1205) the trials keep a tour's direction, and the reversal of
-    the optimum's basin is a trap at 1247: seeds 5, 16 and 32 end there after two trials without
-    the mirror trial (5 and 16 did in a 0.07 s budget run), and every seed of 0-39 reaches the
-    optimum with it."""
+    the optimum's basin is a trap at 1247: over seeds 0-39, two trials end there 7 times without
+    the mirror trial and twice with it (every other seed at the optimum; before the segment swap
+    joined the directed local search, 3 and 0 times)."""
     inst = read_instance(GTSPLIB / "35ftv170.gtsp.gz")
     off = get_solver("lns", mirror=False, **TWO_TRIALS)
     on = get_solver("lns", mirror=True, **TWO_TRIALS)
-    assert [run_solver(off, inst, None, seed=s).objective for s in (5, 16, 32)] == [1247.0] * 3
-    assert {run_solver(on, inst, None, seed=s).objective for s in range(40)} == {1205.0}
+    without = [run_solver(off, inst, None, seed=s).objective for s in range(40)]
+    with_mirror = [run_solver(on, inst, None, seed=s).objective for s in range(40)]
+    assert set(without) == set(with_mirror) == {1205.0, 1247.0}
+    assert without.count(1247.0) >= 5 and with_mirror.count(1247.0) <= 2
 
 
 def test_regional_restarts_default_and_size():
