@@ -149,16 +149,26 @@ def read_manifest(out_dir: Path) -> dict[str, Any]:
     return data if isinstance(data, dict) else {}
 
 
+#: A page quotes at most this many merged reruns' commands; beyond, their count and the last.
+MERGES_QUOTED = 2
+
+
 def run_command(out_dir: Path) -> str:
     """The command a run into ``out_dir`` was made with (its ``manifest.json``), else ``""``;
     then the commands of the partial reruns merged into it (``--merge-into``), each quoted on its
-    own (joined by ``"`, then `"``: the page shows them in code spans after "Made by")."""
+    own (joined by ``"`, then `"``: the page shows them in code spans after "Made by"). Past
+    :data:`MERGES_QUOTED` reruns, their count and the last one's command (every command stays in
+    the manifest): a table merged into many times keeps a readable line."""
     manifest = read_manifest(out_dir)
     try:
         merges = [str(m["command"]) for m in manifest.get("merges", [])]
-        return "`, then `".join([str(manifest["command"]), *merges])
+        first = str(manifest["command"])
     except (KeyError, TypeError, AttributeError):
         return ""
+    if len(merges) <= MERGES_QUOTED:
+        return "`, then `".join([first, *merges])
+    return (f"{first}`, then {len(merges)} partial reruns merged in (each command in its "
+            f"`manifest.json`), the last `{merges[-1]}")
 
 
 def heuristics_block(bench: Benchmark, df: pd.DataFrame, command: str = "") -> str:

@@ -245,3 +245,9 @@ def test_run_command_names_the_merged_reruns(tmp_path):
     manifest["merges"] = [{"command": "A --merge-into X"}, {"command": "B --merge-into X"}]
     (tmp_path / "manifest.json").write_text(json.dumps(manifest))
     assert run_command(tmp_path) == "gtsp-bench bench glns`, then `A --merge-into X`, then `B --merge-into X"
+    manifest["merges"].append({"command": "C --merge-into X"})  # past two: their count and the last
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    said = run_command(tmp_path)
+    assert said == ("gtsp-bench bench glns`, then 3 partial reruns merged in (each command in its "
+                    "`manifest.json`), the last `C --merge-into X")
+    assert "A --merge-into" not in said and said.count("`") % 2 == 0
