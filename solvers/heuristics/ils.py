@@ -27,7 +27,9 @@ from gtsp_bench.solver import Progress, Solution, no_progress
 KICK_CHUNK = 64
 #: Fewest clusters (the depot's included) of a cycle that a double-bridge kick changes.
 KICK_MIN = 8
-#: Share of the budget kept back for the final pricing, so that a solve ends within its budget.
+#: Share of the budget kept back for what follows the search (the final pricing; in the learned
+#: ``local-search``, also its last round's local search when it has no kicks), so that a solve
+#: ends within its budget.
 MARGIN = 0.03
 
 

@@ -26,9 +26,9 @@ One greedy decode is the policy's best guess; a search spends more time for a be
 
 The budget is ``seconds_per_cluster`` * K (default 0.01 s: 1 s at K = 100, 2 s at K = 200), or
 the runner's time limit where smaller; the rounds end at ``1 - kick_share`` of it, the kicks
-:data:`MARGIN` of it early, so that the final pricing ends within it. The search is seeded (the
-segments, frames and kicks); on a loaded machine fewer rounds and kicks fit in the budget, so
-results depend on the machine's speed.
+:data:`~gtsp_bench.solvers.heuristics.ils.MARGIN` of it early, so that the final pricing ends
+within it. The search is seeded (the segments, frames and kicks); on a loaded machine fewer
+rounds and kicks fit in the budget, so results depend on the machine's speed.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ import time
 import numpy as np
 import torch
 from gtsp_bench.solvers.heuristics import lns_kernels as kernels
-from gtsp_bench.solvers.heuristics.ils import kick
+from gtsp_bench.solvers.heuristics.ils import MARGIN, kick
 from gtsp_bench.solvers.heuristics.local_search import LocalSearch
 from gtsp_bench.solvers.learned.env import (
     EnvBatch,
@@ -59,9 +59,6 @@ from gtsp_bench.solver import Progress, Solution, no_progress
 
 #: Improvements smaller than this share of the tour cost are ignored (rounding noise).
 REL_TOL = 1e-9
-#: Share of the budget kept back for what follows the search (the last round's local search
-#: when there are no kicks, the final pricing), so that a solve ends within its budget.
-MARGIN = 0.03
 #: Default ``kick_share``.
 KICK_SHARE = 0.5
 
