@@ -233,7 +233,8 @@ def test_update_reference_keeps_the_omegas_a_set_holds(tmp_path):
 
 
 def test_run_command_names_the_merged_reruns(tmp_path):
-    """A page's "Made by" quotes the run's command, then each partial rerun merged into it."""
+    """A page's "Made by" quotes the run's command, then each partial rerun merged into it (past
+    two reruns, their count and the last one's command)."""
     import json
 
     from gtsp_bench.bench.output_kinds import run_command
