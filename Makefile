@@ -16,9 +16,10 @@ $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
 		-c constraints.txt -e '.[dev,gurobi,pyvrp,lkh,dask]'
-	@echo "compiling lns's kernels once (numba, cached beside the module; about a minute)"
+	@echo "compiling lns's kernels once (numba, cached beside the module; about two minutes)"
 	$(BIN)/python -c "from gtsp_bench.solvers.heuristics.lns_kernels import warm_up; warm_up()"
 	$(BIN)/python -c "from gtsp_bench.solvers.exact.mip.flow import warm_up; warm_up()"
+	$(BIN)/python -c "from gtsp_bench.proof.pairs import warm_up; warm_up()"
 	touch $(STAMP)
 
 test: $(STAMP)

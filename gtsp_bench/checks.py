@@ -26,6 +26,12 @@ def is_int(value: object) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, np.integer))
 
 
+def all_ints(values: Sequence[object]) -> bool:
+    """Whether every item is an integer (:func:`is_int`): one pass over the items' types when
+    they are plain Python ints (a JSON file's), one call of :func:`is_int` each otherwise."""
+    return set(map(type, values)) <= {int} or all(is_int(v) for v in values)
+
+
 def is_number(value: object) -> bool:
     """Whether ``value`` is a real number (Python or numpy int or float), not a bool."""
     return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))

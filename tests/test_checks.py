@@ -14,6 +14,7 @@ import pytest
 
 from gtsp_bench.checks import (
     MAX_TOUR_COST,
+    all_ints,
     check_executor,
     check_finite_array,
     check_float,
@@ -35,6 +36,15 @@ def test_check_int():
     for bad in (0, -1, 2.0, True, "3", None):
         with pytest.raises(InputError, match="n must be an integer >= 1"):
             check_int("n", bad, 1)
+
+
+def test_all_ints_takes_python_and_numpy_ints_and_nothing_else():
+    """Plain ints (the fast path), numpy ints among them (the item-by-item path) and an empty list
+    pass; one bool, float, string or None among thousands of ints fails."""
+    many = list(range(5000))
+    assert all_ints(many) and all_ints([]) and all_ints([*many, np.int64(3), np.int32(-1)])
+    for bad in (True, 1.0, np.float64(1), "1", None, [1]):
+        assert not all_ints([*many, bad]) and not all_ints([bad])
 
 
 def test_check_float():

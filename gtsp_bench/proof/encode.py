@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from gtsp_bench.checks import is_int
+from gtsp_bench.checks import all_ints, is_int
 
 
 def _gaps(ids: list[int]) -> list[int]:
@@ -38,16 +38,11 @@ def _gaps(ids: list[int]) -> list[int]:
 
 def _ungap(gaps: Any, what: str, allow_empty: bool = False) -> list[int]:
     """Ids from gaps (each after the first at least 1, the first at least 0)."""
-    if (not isinstance(gaps, list) or (not gaps and not allow_empty)
-            or not all(is_int(g) for g in gaps)):
+    if not isinstance(gaps, list) or (not gaps and not allow_empty) or not all_ints(gaps):
         raise ValueError(f"{what} must be a {'' if allow_empty else 'non-empty '}list of integer gaps")
-    if gaps and (gaps[0] < 0 or any(g < 1 for g in gaps[1:])):
+    if gaps and (gaps[0] < 0 or min(gaps[1:], default=1) < 1):
         raise ValueError(f"{what}: gaps must be positive after a first id of at least 0")
-    out, at = [], 0
-    for g in gaps:
-        at += g
-        out.append(at)
-    return out
+    return list(itertools.accumulate(gaps))
 
 
 def encode_cut(cut: dict[str, Any]) -> list[Any]:
@@ -165,13 +160,13 @@ def _decode_one(p: dict[str, Any], earlier: list[tuple[list[int], dict[int, int]
     """The dense duals and cut duals of one version 2 proof, its base applied."""
     cl, dg, cu = p.get("cluster"), p.get("degree"), p.get("cuts")
     for name, vals, size in (("cluster", cl, m), ("degree", dg, n)):
-        if not isinstance(vals, list) or len(vals) != size or not all(is_int(v) for v in vals):
+        if not isinstance(vals, list) or len(vals) != size or not all_ints(vals):
             raise ValueError(f"'{name}' must be a list of {size} integers")
     if not isinstance(cu, list) or len(cu) != 2:
         raise ValueError("'cuts' must be [rows, values]")
     rows = _ungap(cu[0], "cut rows", allow_empty=True)
     vals = cu[1]
-    if not isinstance(vals, list) or len(vals) != len(rows) or not all(is_int(v) for v in vals):
+    if not isinstance(vals, list) or len(vals) != len(rows) or not all_ints(vals):
         raise ValueError("cut values must be one integer per row")
     vec = [int(v) for v in cl + dg]
     cuts = dict(zip(rows, (int(v) for v in vals), strict=True))

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from gtsp_bench.checks import is_int
+from gtsp_bench.checks import all_ints, is_int
 
 #: The families, by the name a certificate uses.
 FAMILIES = ("gsec", "blossom")
@@ -88,8 +88,7 @@ Cut = Gsec | Blossom
 
 def _ints(value: Any, what: str, low: int, high: int) -> np.ndarray:
     """A non-empty list of distinct integers in ``[low, high)``."""
-    if (not isinstance(value, list) or not value
-            or not all(is_int(v) for v in value)):
+    if not isinstance(value, list) or not value or not all_ints(value):
         raise ValueError(f"{what} must be a non-empty list of integers")
     arr = np.array(value, dtype=np.int64)
     if arr.min() < low or arr.max() >= high:

@@ -157,6 +157,32 @@ def test_the_sums_of_subtour_rows_are_exact() -> None:
     assert (got_x.astype(object) == exact_x).all() and (got_y.astype(object) == exact_y).all()
 
 
+def test_nonzero_through_the_flat_array_is_numpys() -> None:
+    """The bounds' ``_nonzero`` gives numpy's index arrays, in numpy's order, in one and two
+    dimensions, for empty and full masks too."""
+    from gtsp_bench.proof.bounds import _nonzero
+
+    rng = np.random.default_rng(5)
+    for mask in (rng.random((37, 41)) < 0.1, rng.random(50) < 0.3, np.zeros((4, 4), bool),
+                 np.ones((3, 5), bool), np.zeros(0, bool)):
+        got, want = _nonzero(mask), np.nonzero(mask)
+        assert len(got) == len(want) and all(np.array_equal(g, w) for g, w in zip(got, want, strict=True))
+
+
+def test_plain_and_numpy_dual_entries_price_alike() -> None:
+    """A proof's ``[index, value]`` pairs read the same as plain ints (a JSON file's) and as numpy
+    ints; an index outside the range among many good pairs is named."""
+    problem = tiny(0)
+    space = Space.of(problem)
+    n = space.n_nodes
+    plain = {"kind": "dual", "degree": [[i, 3 * i - 7] for i in range(n)]}
+    numpy = {"kind": "dual", "degree": [[np.int64(i), np.int16(3 * i - 7)] for i in range(n)]}
+    a, b = price_duals(space, [], plain, BITS), price_duals(space, [], numpy, BITS)
+    assert np.array_equal(a.aw_y, b.aw_y) and np.array_equal(a.aw_x, b.aw_x) and a.rhs == b.rhs
+    with pytest.raises(ValueError, match=rf"\[{n}, 1\] is not \[index in \[0, {n}\)"):
+        price_duals(space, [], {"kind": "dual", "degree": [*plain["degree"][1:], [n, 1]]}, BITS)
+
+
 @pytest.mark.parametrize("kind", ["dual", "farkas"])
 def test_the_float_reduced_costs_are_within_their_error_bound(kind: str) -> None:
     """The float reduced costs (they choose the columns summed exactly and those fixed by
