@@ -31,11 +31,15 @@ def test_readme_api_example_runs():
 
 
 def test_readme_lists_every_builtin_solver():
-    """The README's solver table has one row per built-in solver, and no other."""
+    """The README's solver table has one row per built-in solver, and no other; the README and
+    the docs' front page count them right."""
     from gtsp_bench.solvers import BUILTIN
 
-    rows = re.findall(r"^\| `([^`]+)` \|", (REPO / "README.md").read_text(encoding="utf-8"), flags=re.M)
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `([^`]+)` \|", readme, flags=re.M)
     assert sorted(rows) == sorted(b.name for b in BUILTIN)
+    for text in (readme, (REPO / "docs" / "index.md").read_text(encoding="utf-8")):
+        assert re.findall(r"(\d+) pluggable solvers", text) == [str(len(BUILTIN))]
 
 
 def test_adding_a_solver_example_plugs_in():
