@@ -9,8 +9,8 @@ bound. A Farkas proof is the same with ``c = 0``: a positive value shows that no
 domain.
 
 Duals are integers scaled by ``2**bits``; the scaled ``A'w`` of every column is computed in int64
-(the subtour rows' part, ``M' diag(w) M`` over their member masks, as integer sums over member
-pairs in :mod:`gtsp_bench.proof.pairs`) and
+(over the edge columns in one compiled loop, :mod:`gtsp_bench.proof.pairs`: the subtour rows'
+part ``M' diag(w) M`` over their member masks as sums over member pairs) and
 the costs are compared and summed exactly (scaled integers for integer costs, fractions
 otherwise).
 """
@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from gtsp_bench.checks import all_ints, is_int
 from gtsp_bench.problem import Problem
 from gtsp_bench.proof.families import Blossom, Cut, Gsec, member_y_coef
+from gtsp_bench.proof.pairs import edge_sums
 
 #: Largest magnitude of any scaled sum (int64 with room).
 _LIMIT = 2**62
@@ -150,16 +151,11 @@ def _nonzero(mask: np.ndarray) -> tuple[np.ndarray, ...]:
     return tuple(np.unravel_index(flat, mask.shape)) if mask.ndim > 1 else (flat,)
 
 
-def _gsec_sums(rows: list[Gsec], weights: np.ndarray, cluster_of: np.ndarray,
-               out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """``A'w`` of subtour rows with int64 ``weights``, exactly: ``(n,)`` over the y columns and
-    ``(n, n)`` over the node pairs, ``M' diag(w) M`` for ``M`` the rows' 0/1 member masks (each
-    row's weight summed over its ordered member pairs, ``i == j`` too), added into ``out`` when
-    given. Integer sums (a sparse product and :func:`~gtsp_bench.proof.pairs.add_member_pairs`):
-    as many operations as member pairs, no float rounding, no threads."""
-    from gtsp_bench.proof.pairs import add_member_pairs
-
-    n = len(cluster_of)
+def _gsec_sums(rows: list[Gsec], weights: np.ndarray, cluster_of: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``A'w`` of subtour rows with int64 ``weights`` over the y columns, exactly (``(n,)``, an
+    integer sparse product: no float rounding), and the rows' members as CSR ``indices`` and
+    ``indptr`` for the edge columns' part (:func:`~gtsp_bench.proof.pairs.edge_sums`)."""
     nodes = [r.nodes for r in rows]
     counts = np.array([len(q) for q in nodes], dtype=np.int64)
     indices = np.concatenate(nodes).astype(np.int64, copy=False)
@@ -168,10 +164,8 @@ def _gsec_sums(rows: list[Gsec], weights: np.ndarray, cluster_of: np.ndarray,
     c1 = np.array([r.c1 for r in rows])[row_of]
     c2 = np.array([r.c2 for r in rows])[row_of]
     y_coef = member_y_coef(cluster_of[indices], c1, c2)
-    aw_y = sp.csr_array((y_coef, indices, indptr), shape=(len(rows), n)).T @ weights
-    aw_x = np.zeros((n, n), np.int64) if out is None else out
-    add_member_pairs(indices, indptr, np.ascontiguousarray(weights, dtype=np.int64), aw_x)
-    return np.asarray(aw_y, dtype=np.int64), aw_x
+    aw_y = sp.csr_array((y_coef, indices, indptr), shape=(len(rows), len(cluster_of))).T @ weights
+    return np.asarray(aw_y, dtype=np.int64), indices, indptr
 
 
 @dataclass(frozen=True)
@@ -186,7 +180,7 @@ class Priced:
     farkas: bool
     rhs: int  # b'w, scaled
     aw_y: np.ndarray  # (n,) int64: A'w of the y columns, scaled
-    aw_x: np.ndarray  # (n, n) int64: A'w of the edge columns, scaled
+    aw_x: np.ndarray  # (n, n) int64: A'w of the edge columns (entries i < j), scaled
 
     def approx(self, x: bool) -> tuple[np.ndarray, float]:
         """Float reduced costs of the y (``x`` false) or edge columns and a bound on the error of
@@ -311,12 +305,13 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
             + 2 * sum(map(abs, kv.tolist()))) >= _LIMIT:  # Python ints: no wrap
         raise ValueError("dual values too large to sum exactly")
     aw_y = u[space.cluster_of] - 2 * pi
-    aw_x = np.add.outer(pi, pi)  # (n, n) int64: added to in place below
     rhs = int(cv.sum())
     rows = [cuts[r] for r in ki.tolist()]
     g_idx = [k for k, c in enumerate(rows) if isinstance(c, Gsec)]
+    weights = np.ascontiguousarray(kv[g_idx], dtype=np.int64)
+    indices, indptr = np.zeros(0, np.int64), np.zeros(1, np.int64)
     if g_idx:
-        gy, _ = _gsec_sums([rows[k] for k in g_idx], kv[g_idx], space.cluster_of, out=aw_x)
+        gy, indices, indptr = _gsec_sums([rows[k] for k in g_idx], weights, space.cluster_of)
         aw_y += gy
     pair = np.zeros((m, m), np.int64)
     for c, w in zip(rows, kv.tolist(), strict=True):
@@ -326,8 +321,7 @@ def price_duals(space: Space, cuts: list[Cut], proof: dict[str, Any], bits: int)
             pair[c.teeth[:, 0], c.teeth[:, 1]] += w
             pair[c.teeth[:, 1], c.teeth[:, 0]] += w
             rhs += w * c.rhs
-    if pair.any():
-        aw_x += pair[space.cluster_of][:, space.cluster_of]
+    aw_x = edge_sums(pi, pair, space.cluster_of.astype(np.int64, copy=False), indices, indptr, weights)
     scale = 2**bits
     big = space.max_cost * scale >= _LIMIT // 4
     if kind != "farkas" and space.integral and big:

@@ -3,6 +3,7 @@ arithmetic is exact; Farkas proofs show empty domains; bad duals are refused."""
 
 from __future__ import annotations
 
+import itertools
 from fractions import Fraction
 
 import numpy as np
@@ -139,9 +140,9 @@ def test_bad_duals_are_refused() -> None:
 
 
 def test_the_sums_of_subtour_rows_are_exact() -> None:
-    """The gsec rows' duals summed over their node pairs equal the exact product M'diag(w)M, and
-    over the y columns each row's coefficients times its dual, also for duals near the largest
-    allowed (no float rounding anywhere)."""
+    """The gsec rows' duals summed over the y columns equal each row's coefficients times its
+    dual, and over the edge columns (with degree duals) the exact product M'diag(w)M plus
+    ``pi_i + pi_j``, also for duals near the largest allowed (no float rounding anywhere)."""
     from gtsp_bench.proof.bounds import _gsec_sums
 
     rng = np.random.default_rng(3)
@@ -152,9 +153,20 @@ def test_the_sums_of_subtour_rows_are_exact() -> None:
     mask = np.array([r.members for r in rows]).astype(object)
     exact_x = (mask.T * w.astype(object)) @ mask
     exact_y = sum(int(wk) * _y_row(r, cluster_of).astype(object) for r, wk in zip(rows, w, strict=True))
-    got_y, got_x = _gsec_sums(rows, w, cluster_of)
-    assert got_x.dtype == got_y.dtype == np.int64
-    assert (got_x.astype(object) == exact_x).all() and (got_y.astype(object) == exact_y).all()
+    got_y, indices, indptr = _gsec_sums(rows, w, cluster_of)
+    assert got_y.dtype == np.int64 and (got_y.astype(object) == exact_y).all()
+    assert [indices[a:b].tolist() for a, b in itertools.pairwise(indptr)] == [r.nodes.tolist() for r in rows]
+
+    space = Space(cluster_of, np.zeros(n), np.zeros((n, n)), np.triu(cluster_of[:, None] != cluster_of, 1),
+                  True)
+    cuts = [{"family": "gsec", "Q": r.nodes.tolist(), "C1": r.c1, "C2": r.c2} for r in rows]
+    pi = rng.integers(-(2**50), 2**50, n)
+    proof = {"kind": "dual", "degree": [[i, int(v)] for i, v in enumerate(pi)],
+             "cuts": [[k, int(v)] for k, v in enumerate(w)]}
+    priced = price_duals(space, [parse_cut(c, cluster_of) for c in cuts], proof, BITS)
+    want = exact_x + np.add.outer(pi, pi).astype(object)
+    got = priced.aw_x[space.edge].astype(object)
+    assert priced.aw_x.dtype == np.int64 and (got == want[space.edge]).all()
 
 
 def test_nonzero_through_the_flat_array_is_numpys() -> None:
