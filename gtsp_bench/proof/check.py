@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -217,7 +218,8 @@ def _tree(nodes: Any) -> dict[int, list[int]]:
 
 
 def check_certificate(instance: Instance, cert: dict[str, Any],
-                      uses: dict[int, list[tuple[Any, ...]]] | None = None) -> CheckResult:
+                      uses: dict[int, list[tuple[Any, ...]]] | None = None,
+                      on_node: Callable[[int, int], None] | None = None) -> CheckResult:
     """Check a certificate against an instance.
 
     Parameters
@@ -228,6 +230,9 @@ def check_certificate(instance: Instance, cert: dict[str, Any],
         The certificate (:func:`gtsp_bench.proof.format.read_certificate`).
     uses
         When given, what each proof is used for is recorded in it (see :class:`ProofChecker`).
+    on_node
+        When given, called after each node of the tree with the nodes walked and the nodes in
+        all (a progress bar's feed).
 
     Returns
     -------
@@ -288,6 +293,8 @@ def check_certificate(instance: Instance, cert: dict[str, Any],
     while stack:
         k, domain = stack.pop()
         seen += 1
+        if on_node is not None:
+            on_node(seen, len(nodes))
         kids = children[k]
         if domain is None:  # below a node holding no tour under the cutoff: nothing to check
             stack.extend((c, None) for c in kids)

@@ -25,6 +25,9 @@ def cert(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_a_proof_checks(cert: Path, capsys: pytest.CaptureFixture[str]) -> None:
     capsys.readouterr()
     assert main(["check-proof", BERLIN, str(cert)]) == 0
+    done = capsys.readouterr()  # no bar: stderr is not a terminal here
+    assert done.out == "proven optimal: 4040\n" and done.err == ""
+    assert main(["check-proof", "--no-progress", BERLIN, str(cert)]) == 0
     assert capsys.readouterr().out == "proven optimal: 4040\n"
 
 

@@ -64,6 +64,14 @@ def test_certificates_verify(berlin: tuple[Instance, dict], branched: tuple[Inst
     assert r.summary().startswith("proven optimal: ")
 
 
+def test_on_node_counts_every_node_of_the_tree(branched: tuple[Instance, dict]) -> None:
+    """The progress feed gets (nodes walked, nodes in all) once per node, up to all of them."""
+    inst, cert = branched
+    calls: list[tuple[int, int]] = []
+    r = check_certificate(inst, cert, on_node=lambda seen, total: calls.append((seen, total)))
+    assert r.nodes >= 3 and calls == [(k, r.nodes) for k in range(1, r.nodes + 1)]
+
+
 def test_the_certified_value_is_dps_optimum(tmp_path: Any) -> None:
     inst = generate_instance(7, 4, seed=0)
     r = check_certificate(inst, _certify(inst, 0.3, tmp_path / "k7.cert.json.gz"))
