@@ -87,6 +87,18 @@ def test_neighbours_are_nearest_first():
         assert max(d) <= min(others)
 
 
+def test_kth_value_is_numpys_partition():
+    """The selection behind the partial sort gives ``np.partition(row, k)[k]`` for every rank,
+    on rows of many ties, with infinite entries, sorted, reversed and of one value."""
+    rng = np.random.default_rng(8)
+    rows = [rng.integers(0, 4, 40).astype(np.float64), rng.random(57), np.arange(30.0),
+            np.arange(30.0)[::-1].copy(), np.full(9, 2.5), np.array([3.0])]
+    rows[0][[3, 17]] = np.inf
+    for row in rows:
+        for k in range(len(row)):
+            assert kernels._kth_value(row, k) == np.partition(row, k)[k], (row, k)
+
+
 def test_nearest_first_is_the_start_of_a_stable_argsort():
     """The partial sort behind the quadrant lists gives the first entries of a full stable sort,
     ties (common with rounded distances) in index order, an infinite entry included."""
